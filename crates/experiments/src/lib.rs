@@ -1,1 +1,16 @@
-//! Placeholder: filled by its issue.
+//! The comparative study of Gu & Zhu (2014), "Comparative experiments regarding approaches to
+//! feedforward hysteresis compensation for piezoceramic actuators", Smart Mater. Struct. 23 095029
+//! (doi:10.1088/0964-1726/23/9/095029), section 4, run on a simulated stage.
+//!
+//! This crate owns the trajectories, the tracking indices (D1), (D2) and (12), the study itself,
+//! its figures and the HTML report. It holds no model maths of its own: models, inverses and
+//! compensators come from `hystcomp-core`, identification from `hystcomp-identify` and the stage
+//! from `hystcomp-stage`.
+
+pub mod indices;
+pub mod reference;
+pub mod trajectory;
+
+pub use indices::{IndexError, TrackingIndices};
+pub use reference::Reference;
+pub use trajectory::MultisineTrajectory;

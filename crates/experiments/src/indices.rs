@@ -1,0 +1,215 @@
+//! Tracking indices of section 4.3: the maximum error e_m (D1, corrected as in ERRATA item 2),
+//! the RMS error e_rms (D2) and the maximum hysteresis error e_mhe (eq. (12), made precise as in
+//! ERRATA item 6). All three are in percent of the desired range `max y_d - min y_d`.
+
+use core::fmt;
+
+/// Default number of bins across the `y_d` range used by [`e_mhe_percent`].
+///
+/// With 100 bins the slope of the map inside one bin adds at most about 1 % of the range to a
+/// perfectly single-valued map; the report states the bin count beside every e_mhe figure.
+pub const DEFAULT_MHE_BINS: usize = 100;
+
+/// Why the indices of a pair of records could not be computed.
+#[derive(Debug, Clone, PartialEq)]
+pub enum IndexError {
+    /// The two records have different lengths.
+    LengthMismatch { desired: usize, measured: usize },
+    /// Fewer than two samples.
+    TooFewSamples(usize),
+    /// A sample is NaN or infinite.
+    NonFinite { record: &'static str, index: usize },
+    /// `max y_d - min y_d` is zero, so no percentage can be formed.
+    ConstantDesired,
+    /// Fewer than one bin asked for.
+    NoBins,
+}
+
+impl fmt::Display for IndexError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            IndexError::LengthMismatch { desired, measured } => write!(
+                f,
+                "the desired record has {desired} samples but the measured record has {measured}; \
+                 the indices compare them sample by sample, so give records of equal length"
+            ),
+            IndexError::TooFewSamples(n) => {
+                write!(f, "{n} sample(s) given; the indices need at least 2")
+            }
+            IndexError::NonFinite { record, index } => write!(
+                f,
+                "the {record} record has a NaN or infinite value at sample {index} (0-based)"
+            ),
+            IndexError::ConstantDesired => write!(
+                f,
+                "the desired trajectory is constant, so its range is zero and the indices \
+                 (percent of the desired range) are undefined"
+            ),
+            IndexError::NoBins => write!(f, "e_mhe needs at least one bin"),
+        }
+    }
+}
+
+impl std::error::Error for IndexError {}
+
+/// The three indices of Table 3, in percent of the desired range.
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct TrackingIndices {
+    /// Maximum hysteresis error, eq. (12) (ERRATA item 6), %.
+    pub e_mhe_percent: f64,
+    /// Maximum tracking error, (D1) (ERRATA item 2), %.
+    pub e_m_percent: f64,
+    /// RMS tracking error, (D2), %.
+    pub e_rms_percent: f64,
+    /// Number of `y_d` bins used for e_mhe.
+    pub mhe_bins: usize,
+}
+
+impl TrackingIndices {
+    /// Computes all three indices of `measured` (`y`) against `desired` (`y_d`), with
+    /// `mhe_bins` bins for e_mhe.
+    pub fn compute(desired: &[f64], measured: &[f64], mhe_bins: usize) -> Result<Self, IndexError> {
+        Ok(TrackingIndices {
+            e_mhe_percent: e_mhe_percent(desired, measured, mhe_bins)?,
+            e_m_percent: e_m_percent(desired, measured)?,
+            e_rms_percent: e_rms_percent(desired, measured)?,
+            mhe_bins,
+        })
+    }
+}
+
+/// Checks the pair and returns `(min y_d, max y_d)`.
+fn desired_range(desired: &[f64], measured: &[f64]) -> Result<(f64, f64), IndexError> {
+    if desired.len() != measured.len() {
+        return Err(IndexError::LengthMismatch {
+            desired: desired.len(),
+            measured: measured.len(),
+        });
+    }
+    if desired.len() < 2 {
+        return Err(IndexError::TooFewSamples(desired.len()));
+    }
+    for (record, values) in [("desired", desired), ("measured", measured)] {
+        if let Some(index) = values.iter().position(|v| !v.is_finite()) {
+            return Err(IndexError::NonFinite { record, index });
+        }
+    }
+    let lo = desired.iter().copied().fold(f64::INFINITY, f64::min);
+    let hi = desired.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+    if hi - lo <= 0.0 {
+        return Err(IndexError::ConstantDesired);
+    }
+    Ok((lo, hi))
+}
+
+/// (D1), corrected (ERRATA item 2): `max |y - y_d| / (max y_d - min y_d) * 100 %`.
+pub fn e_m_percent(desired: &[f64], measured: &[f64]) -> Result<f64, IndexError> {
+    let (lo, hi) = desired_range(desired, measured)?;
+    let max = desired
+        .iter()
+        .zip(measured)
+        .map(|(d, y)| (y - d).abs())
+        .fold(0.0, f64::max);
+    Ok(max / (hi - lo) * 100.0)
+}
+
+/// (D2): `sqrt(mean (y - y_d)^2) / (max y_d - min y_d) * 100 %` (uniform sampling, so the
+/// time integral is the sample mean).
+pub fn e_rms_percent(desired: &[f64], measured: &[f64]) -> Result<f64, IndexError> {
+    let (lo, hi) = desired_range(desired, measured)?;
+    let sum: f64 = desired
+        .iter()
+        .zip(measured)
+        .map(|(d, y)| (y - d) * (y - d))
+        .sum();
+    Ok((sum / desired.len() as f64).sqrt() / (hi - lo) * 100.0)
+}
+
+/// Eq. (12) as made precise in ERRATA item 6: the largest vertical width of the `y` versus
+/// `y_d` map. The `y_d` range is cut into `bins` equal bins; in each bin with at least two
+/// samples the width is `max y - min y`; the largest width is divided by `max y_d - min y_d`.
+pub fn e_mhe_percent(desired: &[f64], measured: &[f64], bins: usize) -> Result<f64, IndexError> {
+    if bins == 0 {
+        return Err(IndexError::NoBins);
+    }
+    let (lo, hi) = desired_range(desired, measured)?;
+    let mut low = vec![f64::INFINITY; bins];
+    let mut high = vec![f64::NEG_INFINITY; bins];
+    let mut count = vec![0usize; bins];
+    let width = (hi - lo) / bins as f64;
+    for (&d, &y) in desired.iter().zip(measured) {
+        let bin = (((d - lo) / width) as usize).min(bins - 1);
+        low[bin] = low[bin].min(y);
+        high[bin] = high[bin].max(y);
+        count[bin] += 1;
+    }
+    let widest = (0..bins)
+        .filter(|&b| count[b] >= 2)
+        .map(|b| high[b] - low[b])
+        .fold(0.0, f64::max);
+    Ok(widest / (hi - lo) * 100.0)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn ramp(n: usize) -> Vec<f64> {
+        (0..n).map(|i| i as f64 / (n - 1) as f64 * 10.0).collect()
+    }
+
+    #[test]
+    fn perfect_tracking_has_zero_error() {
+        let d = ramp(1000);
+        let t = TrackingIndices::compute(&d, &d, 100).unwrap();
+        assert_eq!(t.e_m_percent, 0.0);
+        assert_eq!(t.e_rms_percent, 0.0);
+        // A single-valued map has only the in-bin slope as width: at most one bin of the range.
+        assert!(t.e_mhe_percent <= 1.0 + 1e-9, "{}", t.e_mhe_percent);
+    }
+
+    #[test]
+    fn constant_offset_gives_offset_over_range() {
+        let d = ramp(500);
+        let y: Vec<f64> = d.iter().map(|v| v + 0.5).collect();
+        assert!((e_m_percent(&d, &y).unwrap() - 5.0).abs() < 1e-12);
+        assert!((e_rms_percent(&d, &y).unwrap() - 5.0).abs() < 1e-12);
+    }
+
+    #[test]
+    fn loop_width_is_found() {
+        // Up along y = y_d, down along y = y_d + 2: a loop 2 wide on a range of 10 -> 20 %.
+        let up = ramp(1000);
+        let down: Vec<f64> = up.iter().rev().copied().collect();
+        let mut d = up.clone();
+        d.extend(&down);
+        let mut y = up.clone();
+        y.extend(down.iter().map(|v| v + 2.0));
+        let e = e_mhe_percent(&d, &y, 100).unwrap();
+        assert!((20.0..=21.0 + 1e-9).contains(&e), "{e}");
+    }
+
+    #[test]
+    fn bad_inputs_are_refused() {
+        let d = ramp(10);
+        assert!(matches!(
+            e_m_percent(&d, &d[..5]),
+            Err(IndexError::LengthMismatch { .. })
+        ));
+        let mut y = d.clone();
+        y[3] = f64::NAN;
+        assert_eq!(
+            e_rms_percent(&d, &y),
+            Err(IndexError::NonFinite {
+                record: "measured",
+                index: 3
+            })
+        );
+        assert_eq!(
+            e_mhe_percent(&[1.0; 4], &[1.0; 4], 10),
+            Err(IndexError::ConstantDesired)
+        );
+        assert_eq!(e_m_percent(&[1.0], &[1.0]), Err(IndexError::TooFewSamples(1)));
+        assert_eq!(e_mhe_percent(&d, &d, 0), Err(IndexError::NoBins));
+    }
+}
