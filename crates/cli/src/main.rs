@@ -1,1 +1,69 @@
-fn main() {}
+//! `hystcomp`: the command line of the toolkit. Argument parsing, file formats, progress bars,
+//! exit codes and messages for people live here; the maths lives in the library crates.
+
+mod commands;
+mod error;
+
+use std::process::ExitCode;
+
+use clap::{Parser, Subcommand};
+
+pub use error::CliError;
+
+/// Feedforward hysteresis compensation for piezoelectric nanopositioners.
+#[derive(Debug, Parser)]
+#[command(name = "hystcomp", version, about, long_about = None)]
+struct Cli {
+    /// Print results as JSON on stdout (for machines) instead of text.
+    #[arg(long, global = true)]
+    json: bool,
+
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Debug, Subcommand)]
+enum Command {
+    /// Run a desired trajectory through a compensator: CSV in, drive voltage CSV out.
+    Compensate(commands::compensate::Args),
+    /// Per-sample cost of the forward model and every compensator.
+    Bench(commands::bench::Args),
+    /// Identify a model from measured (voltage, displacement) samples.
+    Identify(commands::identify::Args),
+    /// Identify on one record, predict and replay the compensators on another.
+    Crossval(commands::crossval::Args),
+    /// Drive the simulated stage with a voltage record.
+    Simulate(commands::simulate::Args),
+    /// Reproduce the paper's comparative study on the simulated stage.
+    Reproduce(commands::reproduce::Args),
+    /// Tracking indices e_m, e_rms and e_mhe of a measured record against a desired one.
+    Evaluate(commands::evaluate::Args),
+}
+
+/// What every subcommand gets besides its own arguments.
+#[derive(Debug, Clone, Copy)]
+pub struct Context {
+    /// `--json` was given: print one JSON document on stdout and nothing else there.
+    pub json: bool,
+}
+
+fn main() -> ExitCode {
+    let cli = Cli::parse();
+    let ctx = Context { json: cli.json };
+    let result = match &cli.command {
+        Command::Compensate(args) => commands::compensate::run(args, ctx),
+        Command::Bench(args) => commands::bench::run(args, ctx),
+        Command::Identify(args) => commands::identify::run(args, ctx),
+        Command::Crossval(args) => commands::crossval::run(args, ctx),
+        Command::Simulate(args) => commands::simulate::run(args, ctx),
+        Command::Reproduce(args) => commands::reproduce::run(args, ctx),
+        Command::Evaluate(args) => commands::evaluate::run(args, ctx),
+    };
+    match result {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(error) => {
+            eprintln!("hystcomp: error: {error}");
+            ExitCode::from(error.exit_code())
+        }
+    }
+}

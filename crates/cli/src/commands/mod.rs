@@ -1,0 +1,9 @@
+//! One module per subcommand; each has an `Args` (clap) and a `run`.
+
+pub mod bench;
+pub mod compensate;
+pub mod crossval;
+pub mod evaluate;
+pub mod identify;
+pub mod reproduce;
+pub mod simulate;

@@ -1,0 +1,56 @@
+//! The one error type of the command line: a message a person can act on and an exit code.
+
+use std::fmt;
+
+/// Exit code for bad input (files, data, models, arguments clap could not check).
+pub const EXIT_INPUT: u8 = 1;
+/// Exit code for a failure while writing results.
+pub const EXIT_OUTPUT: u8 = 3;
+
+/// An error that ends the command with a message on stderr and a non-zero exit code.
+#[derive(Debug)]
+pub struct CliError {
+    message: String,
+    exit_code: u8,
+}
+
+impl CliError {
+    /// An input error (exit code 1).
+    pub fn input(message: impl Into<String>) -> Self {
+        CliError {
+            message: message.into(),
+            exit_code: EXIT_INPUT,
+        }
+    }
+
+    /// An output error (exit code 3).
+    pub fn output(message: impl Into<String>) -> Self {
+        CliError {
+            message: message.into(),
+            exit_code: EXIT_OUTPUT,
+        }
+    }
+
+    /// Prefixes the message with what was being done, e.g. the file involved.
+    pub fn context(mut self, what: impl fmt::Display) -> Self {
+        self.message = format!("{what}: {}", self.message);
+        self
+    }
+
+    /// The process exit code, never 0.
+    pub fn exit_code(&self) -> u8 {
+        self.exit_code
+    }
+}
+
+impl fmt::Display for CliError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(&self.message)
+    }
+}
+
+impl<E: std::error::Error> From<E> for CliError {
+    fn from(error: E) -> Self {
+        CliError::input(error.to_string())
+    }
+}
