@@ -7,8 +7,10 @@
 //! compensators come from `hystcomp-core`, identification from `hystcomp-identify` and the stage
 //! from `hystcomp-stage`.
 
+pub mod figures;
 pub mod indices;
 pub mod reference;
+pub mod report;
 pub mod trajectory;
 
 pub use indices::{IndexError, TrackingIndices};

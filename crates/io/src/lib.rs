@@ -1,1 +1,11 @@
-//! Placeholder: filled by its issue.
+//! File formats of hystcomp, shared by the command line and the bindings:
+//!
+//! - [`model_file`]: the JSON model file (`format_version`, physical scales and units, the
+//!   normalised MPIM parameters and the direction the model maps);
+//! - [`data`]: measured or desired records from CSV and MATLAB Level-5 `.mat` files, with
+//!   errors a person can act on;
+//! - [`atomic`]: files written atomically (temporary file, then rename).
+
+pub mod atomic;
+pub mod data;
+pub mod model_file;

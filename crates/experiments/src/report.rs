@@ -1,0 +1,1 @@
+//! The HTML report (to be filled in).

@@ -1,0 +1,1 @@
+//! Reading records (to be filled in).

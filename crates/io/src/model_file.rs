@@ -1,0 +1,1 @@
+//! The model file format (to be filled in).
