@@ -1,2 +1,69 @@
-//! Placeholder
+//! The `no_std` core of hystcomp: the play operators, the modified Prandtl-Ishlinskii model
+//! (MPIM), its exact inverses and the three feedforward compensators compared by
+//!
+//! > G.-Y. Gu and L.-M. Zhu, "Comparative experiments regarding approaches to feedforward
+//! > hysteresis compensation for piezoceramic actuators", *Smart Mater. Struct.* **23** (2014)
+//! > 095029, doi:10.1088/0964-1726/23/9/095029.
+//!
+//! Equation numbers in the documentation refer to that paper (with the corrections listed in
+//! the project's reading notes: eq. (10) uses `a2`, eqs. (5) and (9) are implicit).
+//!
+//! # Units
+//! The core works in the paper's **normalised** units (eq. (11), `||x||_inf = 1`): model inputs
+//! and outputs are plain numbers, typically in `[0, 1]`. Physical scales (volts, micrometres)
+//! live in the model file (`hystcomp-io`), never here.
+//!
+//! # Plan once, run many times
+//! Constructors validate and do all the set-up (the inverse of eq. (7), the invertibility check);
+//! `step` and `process` never allocate, never read clocks or files and never print.
+//!
+//! # Storage without an allocator
+//! Every type is generic over its storage `B:` [`Buffer`]: `Vec<T>` with the `alloc` feature,
+//! or a fixed array `[T; N]` on a microcontroller without allocator:
+//!
+//! ```
+//! use hystcomp_core::{Compensator, Ihc, Mpim, OutputLimits, SolveMode};
+//!
+//! // Table 1 of the paper (normalised voltage in, normalised displacement out).
+//! let thresholds = [0.0, 0.1, 0.2, 0.3, 0.4, 0.5, 0.6, 0.7, 0.8, 0.9];
+//! let weights = [0.2313, 0.3059, 0.0155, 0.0752, 0.0683, 0.0252, 0.0035, 0.0094, 0.0264, 0.0032];
+//! let plant: Mpim<f64, [f64; 10]> = Mpim::new(&thresholds, &weights, -0.1569, 0.4603)?;
+//! let limits = OutputLimits::new(0.0, 1.0)?;
+//! let mut ihc: Ihc<f64, [f64; 10]> = Ihc::new(&plant, limits, SolveMode::Exact)?;
+//! let mut model = plant.clone();
+//! for k in 0..1000 {
+//!     let desired = 0.4 + 0.3 * (k as f64 * 0.01).sin();
+//!     let voltage = ihc.step(desired);
+//!     assert!((model.step(voltage) - desired).abs() < 1e-9); // P[C[y_d]] = y_d
+//! }
+//! # Ok::<(), hystcomp_core::CoreError>(())
+//! ```
 #![cfg_attr(not(feature = "std"), no_std)]
+#![warn(missing_docs)]
+
+#[cfg(feature = "alloc")]
+extern crate alloc;
+
+mod buffer;
+mod compensator;
+mod dihc;
+mod error;
+mod ihc;
+mod invertibility;
+mod mpim;
+mod play;
+mod real;
+mod solve;
+mod walk;
+mod wihc;
+
+pub use buffer::Buffer;
+pub use compensator::{Compensator, Diagnostics, OutputLimits, SolveMode};
+pub use dihc::Dihc;
+pub use error::CoreError;
+pub use ihc::Ihc;
+pub use invertibility::{BranchSlope, branch_checkpoints};
+pub use mpim::Mpim;
+pub use play::{OneSidedPlay, SymmetricPlay};
+pub use real::Real;
+pub use wihc::Wihc;

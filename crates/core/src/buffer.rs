@@ -1,0 +1,50 @@
+//! Storage for per-operator arrays: heap vectors or fixed arrays.
+
+use crate::CoreError;
+
+/// Storage of one value per play operator.
+///
+/// Implemented for `[T; N]` (no allocator needed: the length is fixed at `N`) and, with the
+/// `alloc` feature, for `Vec<T>` (any length).
+pub trait Buffer<T: Copy>: AsRef<[T]> + AsMut<[T]> + Clone {
+    /// The only length this storage can hold (`Some(N)` for `[T; N]`), or `None` for any length.
+    const CAPACITY: Option<usize>;
+
+    /// A buffer of `len` copies of `value`, or `None` when this storage cannot hold exactly
+    /// `len` values (an array of another length).
+    fn filled(value: T, len: usize) -> Option<Self>;
+}
+
+impl<T: Copy, const N: usize> Buffer<T> for [T; N] {
+    const CAPACITY: Option<usize> = Some(N);
+
+    #[inline]
+    fn filled(value: T, len: usize) -> Option<Self> {
+        (len == N).then_some([value; N])
+    }
+}
+
+#[cfg(feature = "alloc")]
+impl<T: Copy> Buffer<T> for alloc::vec::Vec<T> {
+    const CAPACITY: Option<usize> = None;
+
+    #[inline]
+    fn filled(value: T, len: usize) -> Option<Self> {
+        Some(alloc::vec![value; len])
+    }
+}
+
+/// A buffer of `len` copies of `value`, or the capacity error naming both lengths.
+pub(crate) fn filled<T: Copy, B: Buffer<T>>(value: T, len: usize) -> Result<B, CoreError> {
+    B::filled(value, len).ok_or(CoreError::Capacity {
+        needed: len,
+        capacity: B::CAPACITY.unwrap_or(len),
+    })
+}
+
+/// A buffer holding a copy of `values`.
+pub(crate) fn copied<T: Copy + Default, B: Buffer<T>>(values: &[T]) -> Result<B, CoreError> {
+    let mut buffer: B = filled(T::default(), values.len())?;
+    buffer.as_mut().copy_from_slice(values);
+    Ok(buffer)
+}

@@ -1,0 +1,165 @@
+//! The interface shared by the three feedforward compensators (IHC, WIHC, DIHC).
+
+use crate::{CoreError, Real};
+
+/// The range of control outputs a compensator may emit, in normalised units (the model file
+/// converts from volts). No compensator ever leaves it, whatever it is fed.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct OutputLimits<T> {
+    min: T,
+    max: T,
+}
+
+impl<T: Real> OutputLimits<T> {
+    /// Limits `[min, max]`, both finite, `min < max`.
+    pub fn new(min: T, max: T) -> Result<Self, CoreError> {
+        if min.is_finite() && max.is_finite() && min < max {
+            Ok(OutputLimits { min, max })
+        } else {
+            Err(CoreError::InvalidLimits {
+                min: min.to_f64(),
+                max: max.to_f64(),
+            })
+        }
+    }
+
+    /// The lower limit.
+    pub fn min(&self) -> T {
+        self.min
+    }
+
+    /// The upper limit.
+    pub fn max(&self) -> T {
+        self.max
+    }
+
+    /// `value` clamped into the limits; NaN becomes `fallback` (itself clamped).
+    #[inline]
+    pub fn clamp_or(&self, value: T, fallback: T) -> T {
+        let value = if value.is_nan() { fallback } else { value };
+        if value < self.min {
+            self.min
+        } else if value > self.max {
+            self.max
+        } else if value.is_nan() {
+            self.min
+        } else {
+            value
+        }
+    }
+
+    /// `true` when `value` lies within the limits.
+    pub fn contains(&self, value: T) -> bool {
+        value >= self.min && value <= self.max
+    }
+}
+
+/// How an implicit control law is solved each sample.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum SolveMode {
+    /// The exact per-sample solution of the implicit equation (ERRATA item 4): a bracketed
+    /// scalar solve on the piecewise-cubic branch, so that `P[v](t) = y_d(t)` to machine
+    /// precision when `y_d` is reachable.
+    Exact,
+    /// The loop broken with the previous sample, as real-time Simulink implementations do:
+    /// `v(t - Ts)` in the cubic term of IHC, `H[v](t - Ts)` in WIHC. Lags by one sample.
+    Delayed,
+}
+
+/// What a compensator had to do besides its control law, counted since the last reset.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct Diagnostics {
+    /// Samples whose desired position could not be reached within the output limits (or lay
+    /// outside the input range of a DIHC model): the output was clamped.
+    pub saturated: u64,
+    /// Samples whose desired position was NaN or infinite: the previous output was held.
+    pub non_finite: u64,
+}
+
+/// A feedforward hysteresis compensator: desired position `y_d(t)` in, control `v(t)` out, both
+/// normalised (figure 1 of the paper).
+///
+/// # Safety of the hardware
+/// Every implementation guarantees that each output lies within [`Compensator::limits`] and is
+/// never NaN, whatever it is fed. A NaN or infinite desired position holds the previous output
+/// (the initial output before any sample is 0 clamped into the limits) and is counted in
+/// [`Diagnostics::non_finite`]; a finite desired position that cannot be reached within the
+/// limits gives the nearest limit and is counted in [`Diagnostics::saturated`].
+///
+/// `step` and `process` never allocate.
+pub trait Compensator<T: Real> {
+    /// Back to the initial state: operators' memory zero (eq. (1)), previous output 0 clamped
+    /// into the limits, diagnostics cleared.
+    fn reset(&mut self);
+
+    /// One sample: the control `v(t)` for the desired position `y_d(t)`.
+    fn step(&mut self, desired: T) -> T;
+
+    /// A whole signal: `control[k]` for `desired[k]`; refuses slices of different lengths
+    /// (without touching the state).
+    fn process(&mut self, desired: &[T], control: &mut [T]) -> Result<(), CoreError> {
+        if control.len() != desired.len() {
+            return Err(CoreError::LengthMismatch {
+                what: "control",
+                expected: desired.len(),
+                found: control.len(),
+            });
+        }
+        for (y_d, v) in desired.iter().zip(control.iter_mut()) {
+            *v = self.step(*y_d);
+        }
+        Ok(())
+    }
+
+    /// The output limits.
+    fn limits(&self) -> OutputLimits<T>;
+
+    /// Counters of saturated and non-finite samples since the last reset.
+    fn diagnostics(&self) -> Diagnostics;
+}
+
+/// The state every compensator keeps besides its model: the previous output, the limits and
+/// the counters. Enforces the safety invariant in one place.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) struct OutputGuard<T> {
+    pub limits: OutputLimits<T>,
+    pub previous: T,
+    pub diagnostics: Diagnostics,
+}
+
+impl<T: Real> OutputGuard<T> {
+    pub fn new(limits: OutputLimits<T>) -> Self {
+        OutputGuard {
+            limits,
+            previous: limits.clamp_or(T::zero(), T::zero()),
+            diagnostics: Diagnostics::default(),
+        }
+    }
+
+    pub fn reset(&mut self) {
+        *self = OutputGuard::new(self.limits);
+    }
+
+    /// `Some(y_d)` when finite; otherwise counts it and returns `None` (hold the output).
+    #[inline]
+    pub fn accept(&mut self, desired: T) -> Option<T> {
+        if desired.is_finite() {
+            Some(desired)
+        } else {
+            self.diagnostics.non_finite += 1;
+            None
+        }
+    }
+
+    /// Clamps `value` into the limits (counting a saturation when `saturated` or when the
+    /// clamp changed it), records and returns it.
+    #[inline]
+    pub fn emit(&mut self, value: T, saturated: bool) -> T {
+        let out = self.limits.clamp_or(value, self.previous);
+        if saturated || out != value {
+            self.diagnostics.saturated += 1;
+        }
+        self.previous = out;
+        out
+    }
+}

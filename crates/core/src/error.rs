@@ -1,0 +1,174 @@
+//! The one error type of the core.
+
+use core::fmt;
+
+/// Why a model, a compensator or a call was refused. Values are reported as `f64` whatever the
+/// sample type, so that messages read the same on every target.
+#[derive(Debug, Clone, PartialEq)]
+pub enum CoreError {
+    /// Two arrays that must have one entry per operator (or per sample) have different lengths.
+    LengthMismatch {
+        /// What was being compared, e.g. `"weights"`.
+        what: &'static str,
+        /// The length required.
+        expected: usize,
+        /// The length given.
+        found: usize,
+    },
+    /// A parameter is NaN or infinite.
+    NonFinite {
+        /// Which parameter, e.g. `"thresholds"` or `"a1"`.
+        what: &'static str,
+        /// Its index when it is one entry of an array.
+        index: Option<usize>,
+    },
+    /// A play-operator threshold is negative (eqs. (1)-(2) need `r >= 0`).
+    NegativeThreshold {
+        /// Index of the threshold (0-based).
+        index: usize,
+        /// Its value.
+        value: f64,
+    },
+    /// Thresholds must be sorted in increasing order (`r_1 <= r_2 <= ... <= r_n`).
+    UnsortedThresholds {
+        /// Index (0-based) of the first threshold smaller than its predecessor.
+        index: usize,
+    },
+    /// A fixed-size storage (`[T; N]`) cannot hold the number of operators asked for.
+    Capacity {
+        /// Number of operators asked for.
+        needed: usize,
+        /// Number the storage holds.
+        capacity: usize,
+    },
+    /// Output limits must be finite with `min < max`.
+    InvalidLimits {
+        /// The lower limit given.
+        min: f64,
+        /// The upper limit given.
+        max: f64,
+    },
+    /// An input range must be finite with `lo < hi`.
+    InvalidRange {
+        /// The lower end given.
+        lo: f64,
+        /// The upper end given.
+        hi: f64,
+    },
+    /// The model output is not strictly increasing in its current input on some branch
+    /// reachable within the stated input range, so it cannot be inverted.
+    NotInvertible {
+        /// The smallest branch slope found, `a2 + 3 a1 x^2 + b_1 + ... + b_k`.
+        slope: f64,
+        /// The (normalised) input `x` where it occurs.
+        input: f64,
+        /// How many operators (`k`, the first ones by threshold) are moving with the input there.
+        active_operators: usize,
+        /// The input range checked.
+        range: (f64, f64),
+    },
+    /// The PI part `P1[v] = a2 v + sum b_i F_ri[v]` has a non-positive branch slope
+    /// `a2 + b_1 + ... + b_k`, so its analytic inverse, eq. (7), does not exist.
+    PiPartNotInvertible {
+        /// Number of operators `k` in the offending prefix sum.
+        active_operators: usize,
+        /// The value of `a2 + b_1 + ... + b_k`.
+        slope: f64,
+    },
+    /// The delayed WIHC, `v(t) = (y_d(t) - H[v](t - Ts)) / a2`, is an iteration that diverges
+    /// when `|3 a1 x^2 + sum_{r_i = 0} b_i| >= a2` somewhere in the range.
+    DelayedWihcUnstable {
+        /// The largest ratio `|3 a1 x^2 + sum_{r_i = 0} b_i| / a2` found (must stay below 1).
+        ratio: f64,
+        /// The input where it occurs.
+        input: f64,
+    },
+    /// WIHC divides by `a2` (eq. (9)), which must be positive.
+    NonPositiveA2 {
+        /// The value of `a2`.
+        a2: f64,
+    },
+}
+
+impl fmt::Display for CoreError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            CoreError::LengthMismatch {
+                what,
+                expected,
+                found,
+            } => write!(
+                f,
+                "{what} has {found} entries but {expected} are needed (one per play operator or per sample)"
+            ),
+            CoreError::NonFinite {
+                what,
+                index: Some(i),
+            } => {
+                write!(
+                    f,
+                    "{what}[{i}] is NaN or infinite; every parameter must be finite"
+                )
+            }
+            CoreError::NonFinite { what, index: None } => {
+                write!(f, "{what} is NaN or infinite; it must be finite")
+            }
+            CoreError::NegativeThreshold { index, value } => write!(
+                f,
+                "threshold r[{index}] = {value} is negative; play-operator thresholds must be >= 0 (eqs. (1)-(2))"
+            ),
+            CoreError::UnsortedThresholds { index } => write!(
+                f,
+                "threshold r[{index}] is smaller than r[{}]; sort the operators by increasing threshold",
+                index - 1
+            ),
+            CoreError::Capacity { needed, capacity } => write!(
+                f,
+                "the model has {needed} play operators but the fixed storage holds {capacity}; \
+                 use storage of length {needed}"
+            ),
+            CoreError::InvalidLimits { min, max } => write!(
+                f,
+                "output limits [{min}, {max}] are invalid: both must be finite and min < max"
+            ),
+            CoreError::InvalidRange { lo, hi } => write!(
+                f,
+                "input range [{lo}, {hi}] is invalid: both ends must be finite and lo < hi"
+            ),
+            CoreError::NotInvertible {
+                slope,
+                input,
+                active_operators,
+                range,
+            } => write!(
+                f,
+                "the model is not invertible on the input range [{}, {}]: with the first \
+                 {active_operators} play operator(s) moving, the branch slope \
+                 a2 + 3 a1 x^2 + b_1 + ... + b_{active_operators} is {slope:.6} at normalised input \
+                 x = {input:.6} (it must stay > 0); identify the model with invertibility \
+                 constraints or narrow the range",
+                range.0, range.1
+            ),
+            CoreError::PiPartNotInvertible {
+                active_operators,
+                slope,
+            } => write!(
+                f,
+                "the PI part a2 v + sum b_i F_ri[v] has no inverse (eq. (7)): \
+                 a2 + b_1 + ... + b_{active_operators} = {slope:.6} is not > 0; \
+                 IHC cannot be built from this model (WIHC may still work)"
+            ),
+            CoreError::DelayedWihcUnstable { ratio, input } => write!(
+                f,
+                "the delayed WIHC would diverge: |3 a1 x^2 + sum of zero-threshold weights| / a2 = \
+                 {ratio:.4} >= 1 at x = {input:.4}; use the exact WIHC instead"
+            ),
+            CoreError::NonPositiveA2 { a2 } => {
+                write!(f, "WIHC divides by a2 (eq. (9)) but a2 = {a2} is not > 0")
+            }
+        }
+    }
+}
+
+#[cfg(feature = "std")]
+impl std::error::Error for CoreError {}

@@ -1,0 +1,102 @@
+//! Where the branch slopes of an MPIM must be checked for it to be invertible.
+//!
+//! Given the operators' memory, the MPIM output of eq. (4) is a continuous, piecewise-cubic
+//! function of the current input `x` (ERRATA item 4). While the input moves, operator `i` either
+//! holds its memory (slope 0) or moves with the input (slope 1). From the reset state (zero
+//! memory, eq. (1)) the operators moving together are always the first `k` by threshold, and
+//! operator `k` can only be moving at an input `x` with `x >= lo + r_k` (after rising by `r_k`) or
+//! `x <= max(hi - r_k, 0)` (after falling by `r_k`, or falling from the reset state). The slope of
+//! such a branch is `a2 + 3 a1 x^2 + b_1 + ... + b_k`, a function of `x^2` only, so over an
+//! interval of `x` it is smallest at the smallest or at the largest `x^2`. Checking those few
+//! points for every reachable `k` is therefore exact, and the identification uses the very same
+//! points as linear constraints on `(a1, a2, b)`.
+
+use crate::Real;
+
+/// The smallest branch slope of a model over an input range, and where it occurs.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct BranchSlope<T> {
+    /// `a2 + 3 a1 x^2 + b_1 + ... + b_k`.
+    pub slope: T,
+    /// The (normalised) input `x`.
+    pub input: T,
+    /// `k`, the number of operators (the first ones by threshold) moving with the input.
+    pub active_operators: usize,
+}
+
+/// Calls `visit(k, x)` for every checkpoint: each number `k` of moving operators reachable within
+/// the input range `[min(lo, 0), max(hi, 0)]` (the range always includes the reset input 0, since
+/// the memory starts at zero), with the inputs `x` where the branch slope of that `k` is extreme.
+///
+/// `thresholds` must be sorted increasingly (as [`crate::Mpim`] guarantees). A model is
+/// invertible on the range when `a2 + 3 a1 x^2 + b_1 + ... + b_k > 0` at every checkpoint.
+pub fn branch_checkpoints<T: Real>(
+    thresholds: &[T],
+    lo: T,
+    hi: T,
+    mut visit: impl FnMut(usize, T),
+) {
+    let zero = T::zero();
+    let lo = lo.min(zero);
+    let hi = hi.max(zero);
+    // Operators with r = 0 always move with the input (F_0[x] = x).
+    let always = thresholds.iter().take_while(|r| **r <= zero).count();
+    let mut visit_interval = |k: usize, p: T, q: T| {
+        visit(k, p);
+        visit(k, q);
+        if p < zero && zero < q {
+            visit(k, zero);
+        }
+    };
+    for k in always..=thresholds.len() {
+        let r = if k == 0 { zero } else { thresholds[k - 1] };
+        // Falling: reachable down to lo from max(hi - r, 0).
+        let falling_top = (hi - r).max(zero);
+        // Rising: reachable from lo + r up to hi.
+        let rising_bottom = lo + r;
+        if rising_bottom <= falling_top {
+            visit_interval(k, lo, hi);
+        } else {
+            visit_interval(k, lo, falling_top);
+            if rising_bottom <= hi {
+                visit_interval(k, rising_bottom, hi);
+            }
+        }
+    }
+}
+
+/// The smallest branch slope of `a2 + 3 a1 x^2 + sum b_i F_ri` over the checkpoints of
+/// [`branch_checkpoints`].
+pub(crate) fn min_branch_slope<T: Real>(
+    thresholds: &[T],
+    weights: &[T],
+    a1: T,
+    a2: T,
+    lo: T,
+    hi: T,
+) -> BranchSlope<T> {
+    let three = T::from_f64(3.0);
+    let mut worst = BranchSlope {
+        slope: T::infinity(),
+        input: lo,
+        active_operators: 0,
+    };
+    // Prefix sums are recomputed per checkpoint from a running cache: k only increases.
+    let mut cached_k = 0;
+    let mut prefix = T::zero();
+    branch_checkpoints(thresholds, lo, hi, |k, x| {
+        while cached_k < k {
+            prefix = prefix + weights[cached_k];
+            cached_k += 1;
+        }
+        let slope = a2 + three * a1 * x * x + prefix;
+        if slope < worst.slope {
+            worst = BranchSlope {
+                slope,
+                input: x,
+                active_operators: k,
+            };
+        }
+    });
+    worst
+}

@@ -1,0 +1,303 @@
+//! The modified Prandtl-Ishlinskii model (MPIM), eqs. (3)-(4).
+
+use crate::buffer::{copied, filled};
+use crate::invertibility::min_branch_slope;
+use crate::play::{one_sided, update_bank};
+use crate::{BranchSlope, Buffer, CoreError, Real};
+
+/// The discrete MPIM of eq. (4):
+/// `y(t) = a1 x^3(t) + a2 x(t) + sum_{i=1}^{n} b_i F_{r_i}[x](t)`,
+/// with one-sided play operators `F_r` (eqs. (1)-(2)), thresholds `r_i` and weights `b_i`.
+///
+/// The same type describes a plant model (input: normalised voltage, output: normalised
+/// displacement; Table 1), an inverse model used by DIHC (input: normalised desired position,
+/// output: normalised voltage; Table 2), and with `a1 = 0` the PI part `P1` and its analytic
+/// inverse of eq. (7) (see [`Mpim::pi_part_inverse`]).
+///
+/// `B` is the storage of the per-operator arrays: `Vec<T>` (feature `alloc`) or `[T; n]`.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Mpim<T: Real, B: Buffer<T>> {
+    thresholds: B,
+    weights: B,
+    memory: B,
+    a1: T,
+    a2: T,
+}
+
+impl<T: Real, B: Buffer<T>> Mpim<T, B> {
+    /// A validated model: `thresholds` and `weights` of equal length, every value finite,
+    /// thresholds non-negative and sorted increasingly. The operators' memory starts at zero
+    /// (eq. (1)).
+    pub fn new(thresholds: &[T], weights: &[T], a1: T, a2: T) -> Result<Self, CoreError> {
+        if weights.len() != thresholds.len() {
+            return Err(CoreError::LengthMismatch {
+                what: "weights",
+                expected: thresholds.len(),
+                found: weights.len(),
+            });
+        }
+        for (what, values) in [("thresholds", thresholds), ("weights", weights)] {
+            if let Some(index) = values.iter().position(|v| !v.is_finite()) {
+                return Err(CoreError::NonFinite {
+                    what,
+                    index: Some(index),
+                });
+            }
+        }
+        for (what, value) in [("a1", a1), ("a2", a2)] {
+            if !value.is_finite() {
+                return Err(CoreError::NonFinite { what, index: None });
+            }
+        }
+        if let Some(index) = thresholds.iter().position(|r| *r < T::zero()) {
+            return Err(CoreError::NegativeThreshold {
+                index,
+                value: thresholds[index].to_f64(),
+            });
+        }
+        if let Some(index) = (1..thresholds.len()).find(|&i| thresholds[i] < thresholds[i - 1]) {
+            return Err(CoreError::UnsortedThresholds { index });
+        }
+        Ok(Mpim {
+            thresholds: copied(thresholds)?,
+            weights: copied(weights)?,
+            memory: filled(T::zero(), thresholds.len())?,
+            a1,
+            a2,
+        })
+    }
+
+    /// The same model in another storage (e.g. from `Vec<T>` to `[T; N]`), memory included.
+    pub fn to_storage<B2: Buffer<T>>(&self) -> Result<Mpim<T, B2>, CoreError> {
+        Ok(Mpim {
+            thresholds: copied(self.thresholds())?,
+            weights: copied(self.weights())?,
+            memory: copied(self.memory())?,
+            a1: self.a1,
+            a2: self.a2,
+        })
+    }
+
+    /// Number of play operators `n`.
+    pub fn len(&self) -> usize {
+        self.thresholds.as_ref().len()
+    }
+
+    /// `true` when the model has no play operator (a pure cubic).
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+
+    /// Thresholds `r_i`, increasing.
+    pub fn thresholds(&self) -> &[T] {
+        self.thresholds.as_ref()
+    }
+
+    /// Weights `b_i`, one per threshold.
+    pub fn weights(&self) -> &[T] {
+        self.weights.as_ref()
+    }
+
+    /// Cubic coefficient `a1` of the input function `g(x) = a1 x^3 + a2 x`.
+    pub fn a1(&self) -> T {
+        self.a1
+    }
+
+    /// Linear coefficient `a2` of the input function `g(x) = a1 x^3 + a2 x`.
+    pub fn a2(&self) -> T {
+        self.a2
+    }
+
+    /// The operators' memory `F_{r_i}[x](t_i)`, one per operator.
+    pub fn memory(&self) -> &[T] {
+        self.memory.as_ref()
+    }
+
+    /// Back to zero memory (eq. (1): `F_r[x](0) = f_r(x(0), 0)`).
+    pub fn reset(&mut self) {
+        self.memory.as_mut().fill(T::zero());
+    }
+
+    /// Sets the operators' memory explicitly (one finite value per operator).
+    ///
+    /// The invertibility guarantees of [`Mpim::check_invertible`] hold for memories reachable
+    /// from the reset state; an arbitrary memory is accepted but is the caller's responsibility.
+    pub fn set_memory(&mut self, memory: &[T]) -> Result<(), CoreError> {
+        if memory.len() != self.len() {
+            return Err(CoreError::LengthMismatch {
+                what: "memory",
+                expected: self.len(),
+                found: memory.len(),
+            });
+        }
+        if let Some(index) = memory.iter().position(|v| !v.is_finite()) {
+            return Err(CoreError::NonFinite {
+                what: "memory",
+                index: Some(index),
+            });
+        }
+        self.memory.as_mut().copy_from_slice(memory);
+        Ok(())
+    }
+
+    /// Feeds the next input sample `x(t)` and returns `y(t)`, eq. (4), updating the memory.
+    ///
+    /// NaN in gives NaN out and leaves the memory as it was (a NaN never enters the memory).
+    #[inline]
+    pub fn step(&mut self, input: T) -> T {
+        if input.is_nan() {
+            return input;
+        }
+        let sum = update_bank(
+            self.thresholds.as_ref(),
+            self.weights.as_ref(),
+            self.memory.as_mut(),
+            input,
+        );
+        self.input_function(input) + sum
+    }
+
+    /// Runs a whole signal through [`Mpim::step`]: `output[k] = y(t_k)`.
+    pub fn process(&mut self, input: &[T], output: &mut [T]) -> Result<(), CoreError> {
+        if output.len() != input.len() {
+            return Err(CoreError::LengthMismatch {
+                what: "output",
+                expected: input.len(),
+                found: output.len(),
+            });
+        }
+        for (x, y) in input.iter().zip(output.iter_mut()) {
+            *y = self.step(*x);
+        }
+        Ok(())
+    }
+
+    /// The output the model would give for input `x` from its current memory, without
+    /// changing the memory: the current branch of the piecewise-cubic map (ERRATA item 4).
+    pub fn branch_output(&self, input: T) -> T {
+        let mut sum = T::zero();
+        for ((&w, &r), &b) in self
+            .memory
+            .as_ref()
+            .iter()
+            .zip(self.thresholds.as_ref())
+            .zip(self.weights.as_ref())
+        {
+            sum = sum + b * one_sided(input, r, w);
+        }
+        self.input_function(input) + sum
+    }
+
+    /// `g(x) = a1 x^3 + a2 x`, the polynomial input function of eq. (3).
+    #[inline]
+    pub fn input_function(&self, x: T) -> T {
+        (self.a1 * x * x + self.a2) * x
+    }
+
+    /// The smallest slope of the model output with respect to its current input over every
+    /// branch reachable from the reset state with inputs in `[lo, hi]` (the range is widened to
+    /// include the reset input 0). See [`crate::branch_checkpoints`].
+    pub fn min_branch_slope(&self, lo: T, hi: T) -> Result<BranchSlope<T>, CoreError> {
+        check_range(lo, hi)?;
+        Ok(min_branch_slope(
+            self.thresholds(),
+            self.weights(),
+            self.a1,
+            self.a2,
+            lo,
+            hi,
+        ))
+    }
+
+    /// Checks that the model output is strictly increasing in its current input over
+    /// `[lo, hi]` from any memory reachable from the reset state, i.e. that the model can be
+    /// inverted there (ERRATA item 5). Refuses with the offending slope, input and number of
+    /// moving operators.
+    pub fn check_invertible(&self, lo: T, hi: T) -> Result<BranchSlope<T>, CoreError> {
+        let worst = self.min_branch_slope(lo, hi)?;
+        if worst.slope > T::zero() {
+            Ok(worst)
+        } else {
+            Err(CoreError::NotInvertible {
+                slope: worst.slope.to_f64(),
+                input: worst.input.to_f64(),
+                active_operators: worst.active_operators,
+                range: (lo.min(T::zero()).to_f64(), hi.max(T::zero()).to_f64()),
+            })
+        }
+    }
+
+    /// The analytic inverse of the PI part `P1[v] = a2 v + sum b_i F_{r_i}[v]`, eq. (7):
+    /// `P1^{-1}[w] = a2_hat w + sum b_hat_j F_{r_hat_j}[w]` with
+    /// `r_hat_j = a2 r_j + sum_{i<j} b_i (r_j - r_i)`, `a2_hat = 1 / a2` and
+    /// `b_hat_j = -b_j / ((a2 + sum_{i<j} b_i)(a2 + sum_{i<=j} b_i))`.
+    ///
+    /// Both start from zero memory, and then `P1^{-1}[P1[v]] = v` exactly (ERRATA item 3).
+    /// The cubic term `a1` is not part of `P1`; the result has `a1 = 0`.
+    ///
+    /// When `a2` itself is not positive but operators with `r = 0` (always moving, `F_0[v] = v`)
+    /// make every reachable slope positive, the equivalent form `a2_hat = 1 / (a2 + sum_{r_i=0} b_i)`
+    /// with zero weights on those operators is returned.
+    pub fn pi_part_inverse(&self) -> Result<Mpim<T, B>, CoreError> {
+        let n = self.len();
+        let r = self.thresholds();
+        let b = self.weights();
+        let always = r.iter().take_while(|r| **r <= T::zero()).count();
+        // slope[k] = a2 + b_1 + ... + b_k, the slope of P1 with the first k operators moving.
+        let slope = |k: usize| b[..k].iter().fold(self.a2, |s, &bi| s + bi);
+        for k in always..=n {
+            let s = slope(k);
+            if s.is_nan() || s <= T::zero() {
+                return Err(CoreError::PiPartNotInvertible {
+                    active_operators: k,
+                    slope: s.to_f64(),
+                });
+            }
+        }
+        let literal = (0..always).all(|k| slope(k) > T::zero());
+        let mut r_hat: B = filled(T::zero(), n)?;
+        let mut b_hat: B = filled(T::zero(), n)?;
+        for j in 0..n {
+            // r_hat_j = a2 r_j + sum_{i<j} b_i (r_j - r_i)
+            r_hat.as_mut()[j] = (0..j).fold(self.a2 * r[j], |acc, i| acc + b[i] * (r[j] - r[i]));
+            b_hat.as_mut()[j] = if literal || j >= always {
+                // -b_j / (s_{j-1} s_j) = 1/s_j - 1/s_{j-1} (0-based: slopes j and j + 1).
+                // Otherwise the zero-threshold operators are folded into a2_hat below.
+                T::one() / slope(j + 1) - T::one() / slope(j)
+            } else {
+                T::zero()
+            };
+        }
+        let a2_hat = if literal {
+            T::one() / self.a2
+        } else {
+            T::one() / slope(always)
+        };
+        let inverse = Mpim {
+            thresholds: r_hat,
+            weights: b_hat,
+            memory: filled(T::zero(), n)?,
+            a1: T::zero(),
+            a2: a2_hat,
+        };
+        if let Some(index) = (0..n).find(|&j| !inverse.weights()[j].is_finite()) {
+            return Err(CoreError::NonFinite {
+                what: "inverse weights",
+                index: Some(index),
+            });
+        }
+        Ok(inverse)
+    }
+}
+
+/// Validates an input range.
+pub(crate) fn check_range<T: Real>(lo: T, hi: T) -> Result<(), CoreError> {
+    if lo.is_finite() && hi.is_finite() && lo < hi {
+        Ok(())
+    } else {
+        Err(CoreError::InvalidRange {
+            lo: lo.to_f64(),
+            hi: hi.to_f64(),
+        })
+    }
+}

@@ -1,0 +1,197 @@
+//! Without-inverse hysteresis compensation (WIHC), eq. (9).
+
+use crate::buffer::{copied, filled};
+use crate::compensator::OutputGuard;
+use crate::play::update_bank;
+use crate::solve::increasing_cubic_root;
+use crate::walk::{self, SegmentEquation};
+use crate::{Buffer, Compensator, CoreError, Diagnostics, Mpim, OutputLimits, Real, SolveMode};
+
+/// WIHC, section 3.2: the identified plant MPIM used directly in a multiplicative structure,
+/// `v(t) = (y_d(t) - H[v](t)) / a2` with `H[v](t) = a1 v^3(t) + sum b_i F_{r_i}[v](t)`, eq. (9).
+///
+/// - [`SolveMode::Exact`]: eq. (9) is implicit (`H[v](t)` depends on `v(t)`); it is solved
+///   exactly each sample, so that the plant model gives `P[v](t) = y_d(t)`.
+/// - [`SolveMode::Delayed`]: `H[v](t - Ts)` replaces `H[v](t)`, as real-time implementations do.
+///   This is an iteration that converges only when `|3 a1 x^2 + sum_{r_i=0} b_i| < a2` over the
+///   range, which the constructor checks.
+///
+/// See [`Compensator`] for the output guarantees.
+#[derive(Debug, Clone)]
+pub struct Wihc<T: Real, B: Buffer<T>> {
+    thresholds: B,
+    weights: B,
+    memory: B,
+    a1: T,
+    a2: T,
+    mode: SolveMode,
+    /// `sum b_i w_i` of the current memory.
+    memory_sum: T,
+    guard: OutputGuard<T>,
+}
+
+impl<T: Real, B: Buffer<T>> Wihc<T, B> {
+    /// A WIHC from a plant model. Checks that `a2 > 0`, that the model is invertible over the
+    /// output limits (see [`Mpim::check_invertible`]) and, for the delayed mode, that the
+    /// iteration converges. The model's memory is not used: the compensator starts from the
+    /// reset state.
+    pub fn new<B2: Buffer<T>>(
+        plant: &Mpim<T, B2>,
+        limits: OutputLimits<T>,
+        mode: SolveMode,
+    ) -> Result<Self, CoreError> {
+        let (a1, a2) = (plant.a1(), plant.a2());
+        if a2 <= T::zero() {
+            return Err(CoreError::NonPositiveA2 { a2: a2.to_f64() });
+        }
+        plant.check_invertible(limits.min(), limits.max())?;
+        if mode == SolveMode::Delayed {
+            check_delayed_contraction(plant, limits)?;
+        }
+        let mut wihc = Wihc {
+            thresholds: copied(plant.thresholds())?,
+            weights: copied(plant.weights())?,
+            memory: filled(T::zero(), plant.len())?,
+            a1,
+            a2,
+            mode,
+            memory_sum: T::zero(),
+            guard: OutputGuard::new(limits),
+        };
+        wihc.reset();
+        Ok(wihc)
+    }
+
+    /// The solve mode.
+    pub fn mode(&self) -> SolveMode {
+        self.mode
+    }
+
+    /// The plant model's operators' memory as the compensator tracks it (the memory of
+    /// `F_{r_i}[v]` for the voltages emitted so far).
+    pub fn memory(&self) -> &[T] {
+        self.memory.as_ref()
+    }
+}
+
+/// The small-signal gain of the delayed loop must be below 1 everywhere in the range.
+fn check_delayed_contraction<T: Real, B: Buffer<T>>(
+    plant: &Mpim<T, B>,
+    limits: OutputLimits<T>,
+) -> Result<(), CoreError> {
+    let zero_weights = plant
+        .thresholds()
+        .iter()
+        .zip(plant.weights())
+        .take_while(|(r, _)| **r <= T::zero())
+        .fold(T::zero(), |s, (_, b)| s + *b);
+    let three = T::from_f64(3.0);
+    let lo = limits.min().min(T::zero());
+    let hi = limits.max().max(T::zero());
+    // |3 a1 x^2 + c| is largest at the smallest or largest x^2.
+    let mut candidates = [lo, hi, T::zero()];
+    if !(lo < T::zero() && T::zero() < hi) {
+        candidates[2] = lo;
+    }
+    for x in candidates {
+        let ratio = (three * plant.a1() * x * x + zero_weights).abs() / plant.a2();
+        if ratio.is_nan() || ratio >= T::one() {
+            return Err(CoreError::DelayedWihcUnstable {
+                ratio: ratio.to_f64(),
+                input: x.to_f64(),
+            });
+        }
+    }
+    Ok(())
+}
+
+/// `a1 v^3 + (a2 + sum of moving b) v + beta = y_d` on one segment, in the voltage `v` itself.
+struct Eq9<T> {
+    a1: T,
+    desired: T,
+}
+
+impl<T: Real> SegmentEquation<T> for Eq9<T> {
+    #[inline(always)]
+    fn residual(&self, x: T, alpha: T, beta: T) -> T {
+        (self.a1 * x * x + alpha) * x + beta - self.desired
+    }
+    #[inline(always)]
+    fn control(&self, x: T, _alpha: T, _beta: T) -> T {
+        x
+    }
+    #[inline(always)]
+    fn input_at_control(&self, v: T, _alpha: T, _beta: T) -> T {
+        v
+    }
+    #[inline(always)]
+    fn root(&self, lo: T, hi: T, f_lo: T, f_hi: T, alpha: T, beta: T) -> T {
+        increasing_cubic_root(self.a1, alpha, beta - self.desired, lo, hi, f_lo, f_hi)
+    }
+}
+
+impl<T: Real, B: Buffer<T>> Compensator<T> for Wihc<T, B> {
+    fn reset(&mut self) {
+        self.memory.as_mut().fill(T::zero());
+        self.memory_sum = T::zero();
+        self.guard.reset();
+        // The plant is assumed relaxed at input 0; bring the memory to the first output.
+        let v0 = self.guard.previous;
+        self.memory_sum = update_bank(
+            self.thresholds.as_ref(),
+            self.weights.as_ref(),
+            self.memory.as_mut(),
+            v0,
+        );
+    }
+
+    #[inline]
+    fn step(&mut self, desired: T) -> T {
+        let Some(desired) = self.guard.accept(desired) else {
+            return self.guard.previous;
+        };
+        let v_prev = self.guard.previous;
+        let (v, saturated) = match self.mode {
+            SolveMode::Exact => {
+                let equation = Eq9 {
+                    a1: self.a1,
+                    desired,
+                };
+                let f_prev = equation.residual(v_prev, self.a2, self.memory_sum);
+                let s = walk::solve(
+                    &equation,
+                    self.a2,
+                    self.thresholds.as_ref(),
+                    self.weights.as_ref(),
+                    self.memory.as_ref(),
+                    self.memory_sum,
+                    v_prev,
+                    f_prev,
+                    self.guard.limits,
+                );
+                (s.input, s.saturated)
+            }
+            SolveMode::Delayed => {
+                // H[v](t - Ts) = a1 v^3(t - Ts) + sum b_i F_{r_i}[v](t - Ts).
+                let h_prev = self.a1 * v_prev * v_prev * v_prev + self.memory_sum;
+                ((desired - h_prev) / self.a2, false)
+            }
+        };
+        let v = self.guard.emit(v, saturated);
+        self.memory_sum = update_bank(
+            self.thresholds.as_ref(),
+            self.weights.as_ref(),
+            self.memory.as_mut(),
+            v,
+        );
+        v
+    }
+
+    fn limits(&self) -> OutputLimits<T> {
+        self.guard.limits
+    }
+
+    fn diagnostics(&self) -> Diagnostics {
+        self.guard.diagnostics
+    }
+}

@@ -1,0 +1,171 @@
+//! Shared by the core's integration tests: the paper's tables, seeded random models and inputs,
+//! and plain reference implementations (the oracles the fast paths are checked against).
+#![allow(dead_code)]
+
+use hystcomp_core::{Mpim, OutputLimits};
+use proptest::test_runner::{Config, RngSeed};
+use rand::{Rng, RngExt, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+
+/// Table 1 of the paper (plant model for IHC and WIHC).
+pub const TABLE1_R: [f64; 10] = [0.0, 0.1, 0.2, 0.3, 0.4, 0.5, 0.6, 0.7, 0.8, 0.9];
+pub const TABLE1_B: [f64; 10] = [
+    0.2313, 0.3059, 0.0155, 0.0752, 0.0683, 0.0252, 0.0035, 0.0094, 0.0264, 0.0032,
+];
+pub const TABLE1_A1: f64 = -0.1569;
+pub const TABLE1_A2: f64 = 0.4603;
+
+/// Table 2 of the paper (inverse model for DIHC).
+pub const TABLE2_B: [f64; 10] = [
+    -0.00002, -0.26603, -0.10684, -0.01221, -0.08412, -0.00238, -0.00328, -0.01115, -0.03417,
+    -0.47999,
+];
+pub const TABLE2_A1: f64 = 0.1608;
+pub const TABLE2_A2: f64 = 1.2588;
+
+pub type VecMpim = Mpim<f64, Vec<f64>>;
+
+pub fn table1() -> VecMpim {
+    Mpim::new(&TABLE1_R, &TABLE1_B, TABLE1_A1, TABLE1_A2).unwrap()
+}
+
+pub fn table2() -> VecMpim {
+    Mpim::new(&TABLE1_R, &TABLE2_B, TABLE2_A1, TABLE2_A2).unwrap()
+}
+
+pub fn unit_limits() -> OutputLimits<f64> {
+    OutputLimits::new(0.0, 1.0).unwrap()
+}
+
+/// A fixed-seed proptest configuration: reproducible on every machine, no persistence files.
+pub fn seeded(cases: u32, seed: u64) -> Config {
+    Config {
+        cases,
+        rng_seed: RngSeed::Fixed(seed),
+        failure_persistence: None,
+        ..Config::default()
+    }
+}
+
+pub fn rng(seed: u64) -> ChaCha8Rng {
+    ChaCha8Rng::seed_from_u64(seed)
+}
+
+/// A random model with `n` operators, thresholds `(i - 1)/n` (eq. (11)) or random increasing
+/// ones, weights of both signs; not necessarily invertible.
+pub fn random_model(rng: &mut impl Rng, n: usize) -> VecMpim {
+    let uniform_thresholds = rng.random::<bool>();
+    let mut thresholds: Vec<f64> = if uniform_thresholds {
+        (0..n).map(|i| i as f64 / n as f64).collect()
+    } else {
+        let mut t: Vec<f64> = (0..n).map(|_| rng.random::<f64>() * 0.95).collect();
+        t.sort_by(f64::total_cmp);
+        t
+    };
+    if rng.random::<f64>() < 0.7 && n > 0 {
+        thresholds[0] = 0.0;
+    }
+    let weights: Vec<f64> = (0..n)
+        .map(|_| rng.random::<f64>() * 0.8 / n as f64 * 5.0 - 0.15 * rng.random::<f64>())
+        .collect();
+    let a1 = rng.random::<f64>() * 0.8 - 0.4;
+    let a2 = rng.random::<f64>() * 1.2 + 0.05;
+    Mpim::new(&thresholds, &weights, a1, a2).unwrap()
+}
+
+/// A random model that is invertible on [0, 1] and whose PI part has an inverse (eq. (7)).
+pub fn random_invertible_model(rng: &mut impl Rng, n: usize) -> VecMpim {
+    loop {
+        let m = random_model(rng, n);
+        if m.check_invertible(0.0, 1.0).is_ok()
+            && m.min_branch_slope(0.0, 1.0).unwrap().slope > 0.02
+            && m.pi_part_inverse().is_ok()
+        {
+            return m;
+        }
+    }
+}
+
+/// A random input in `[lo, hi]`: a random walk with occasional jumps and reversals, so that
+/// minor loops of every size appear.
+pub fn random_input(rng: &mut impl Rng, len: usize, lo: f64, hi: f64) -> Vec<f64> {
+    let mut x = lo + (hi - lo) * rng.random::<f64>();
+    let mut direction = 1.0;
+    (0..len)
+        .map(|_| {
+            let u: f64 = rng.random();
+            if u < 0.05 {
+                x = lo + (hi - lo) * rng.random::<f64>();
+            } else {
+                if u < 0.15 {
+                    direction = -direction;
+                }
+                x += direction * (hi - lo) * 0.02 * rng.random::<f64>();
+            }
+            x = x.clamp(lo, hi);
+            x
+        })
+        .collect()
+}
+
+/// The literal play operator of eqs. (1)-(2): `F_r[x](t) = f_r(x(t), F_r[x](t_i))` where `t_i`
+/// is the last turning point of the (linearly interpolated, hence piecewise monotone) input
+/// before `t`, and `f_r(v, w) = max(v - r, min(v, w))`. Memory is taken only at turning points.
+pub fn literal_one_sided_play(r: f64, x: &[f64], initial_memory: f64) -> Vec<f64> {
+    let f = |v: f64, w: f64| (v - r).max(v.min(w));
+    let mut out = Vec::with_capacity(x.len());
+    if x.is_empty() {
+        return out;
+    }
+    // F(t_0) = f_r(x(t_0), w0), eq. (1).
+    let mut at_turn = f(x[0], initial_memory);
+    out.push(at_turn);
+    let mut last_direction = 0.0f64;
+    for k in 1..x.len() {
+        let direction = (x[k] - x[k - 1]).signum();
+        if x[k] != x[k - 1] && last_direction != 0.0 && direction != last_direction {
+            // x[k-1] was a turning point: its output becomes the memory.
+            at_turn = out[k - 1];
+        }
+        if x[k] != x[k - 1] {
+            last_direction = direction;
+        }
+        out.push(f(x[k], at_turn));
+    }
+    out
+}
+
+/// The model output for input `x` by the literal operators, from zero memory.
+pub fn literal_mpim(model: &VecMpim, x: &[f64]) -> Vec<f64> {
+    let mut y: Vec<f64> = x
+        .iter()
+        .map(|&v| model.a1() * v * v * v + model.a2() * v)
+        .collect();
+    for (&r, &b) in model.thresholds().iter().zip(model.weights()) {
+        for (yk, fk) in y.iter_mut().zip(literal_one_sided_play(r, x, 0.0)) {
+            *yk += b * fk;
+        }
+    }
+    y
+}
+
+/// The plain bisection inverse: the `v` in `[lo, hi]` where the plant's current branch gives
+/// `y_d` (the nearest limit when out of reach), 200 halvings.
+pub fn bisection_inverse(plant: &VecMpim, desired: f64, limits: OutputLimits<f64>) -> f64 {
+    let (mut lo, mut hi) = (limits.min(), limits.max());
+    if plant.branch_output(lo) >= desired {
+        return lo;
+    }
+    if plant.branch_output(hi) <= desired {
+        return hi;
+    }
+    for _ in 0..200 {
+        let mid = 0.5 * (lo + hi);
+        if plant.branch_output(mid) < desired {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+    }
+    0.5 * (lo + hi)
+}

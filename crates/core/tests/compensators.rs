@@ -1,0 +1,319 @@
+//! IHC, WIHC and DIHC against plain references, on seeded random models and inputs.
+
+mod common;
+
+use common::*;
+use hystcomp_core::{Compensator, CoreError, Dihc, Ihc, Mpim, OutputLimits, SolveMode, Wihc};
+use proptest::prelude::*;
+use rand::RngExt;
+
+type VecIhc = Ihc<f64, Vec<f64>>;
+type VecWihc = Wihc<f64, Vec<f64>>;
+
+/// A reachable desired trajectory: a random voltage `v` in [0, 1] through the plant.
+fn reachable_desired(plant: &VecMpim, v: &[f64]) -> Vec<f64> {
+    let mut p = plant.clone();
+    v.iter().map(|&x| p.step(x)).collect()
+}
+
+proptest! {
+    #![proptest_config(seeded(128, 21))]
+
+    /// The exact IHC and WIHC give P[C[y_d]] = y_d to 1e-9, recover the voltage that produced
+    /// y_d, and agree with each other to 1e-9.
+    #[test]
+    fn exact_ihc_and_wihc_invert_the_plant_and_agree(seed in any::<u64>(), n in 1usize..25) {
+        let mut rng = rng(seed);
+        let plant = random_invertible_model(&mut rng, n);
+        let v_true = random_input(&mut rng, 600, 0.0, 1.0);
+        let desired = reachable_desired(&plant, &v_true);
+        let limits = unit_limits();
+        let mut ihc: VecIhc = Ihc::new(&plant, limits, SolveMode::Exact).unwrap();
+        let mut wihc: VecWihc = Wihc::new(&plant, limits, SolveMode::Exact).unwrap();
+        let mut p_ihc = plant.clone();
+        let mut p_wihc = plant.clone();
+        for (k, &y_d) in desired.iter().enumerate() {
+            let v_i = ihc.step(y_d);
+            let v_w = wihc.step(y_d);
+            let y_i = p_ihc.step(v_i);
+            let y_w = p_wihc.step(v_w);
+            prop_assert!((y_i - y_d).abs() <= 1e-9, "IHC sample {}: P[C[y_d]] = {} vs {}", k, y_i, y_d);
+            prop_assert!((y_w - y_d).abs() <= 1e-9, "WIHC sample {}: P[C[y_d]] = {} vs {}", k, y_w, y_d);
+            prop_assert!((v_i - v_w).abs() <= 1e-9, "sample {}: IHC {} vs WIHC {}", k, v_i, v_w);
+            prop_assert!((v_w - v_true[k]).abs() <= 1e-7, "sample {}: {} vs true {}", k, v_w, v_true[k]);
+        }
+        prop_assert_eq!(ihc.diagnostics().non_finite, 0);
+    }
+
+    /// The exact WIHC equals a plain bisection on the plant's current branch, also when the
+    /// desired trajectory leaves the reachable range (both then clamp to a limit).
+    #[test]
+    fn exact_wihc_equals_a_bisection_inverse(seed in any::<u64>(), n in 1usize..15) {
+        let mut rng = rng(seed);
+        let plant = random_invertible_model(&mut rng, n);
+        let limits = OutputLimits::new(0.05, 0.9).unwrap();
+        // Partly unreachable: desired positions beyond what 0.05..0.9 can give.
+        let lo = plant.clone().step(0.0) - 0.1;
+        let hi = plant.clone().step(1.0) + 0.1;
+        let desired = random_input(&mut rng, 500, lo, hi);
+        let mut wihc: VecWihc = Wihc::new(&plant, limits, SolveMode::Exact).unwrap();
+        let mut ihc: VecIhc = Ihc::new(&plant, limits, SolveMode::Exact).unwrap();
+        let mut reference = plant.clone();
+        reference.step(limits.min()); // both compensators assume the plant sits at the lower limit
+        for (k, &y_d) in desired.iter().enumerate() {
+            let v_ref = bisection_inverse(&reference, y_d, limits);
+            reference.step(v_ref);
+            let v = wihc.step(y_d);
+            let v_i = ihc.step(y_d);
+            prop_assert!((v - v_ref).abs() <= 1e-9, "sample {}: WIHC {} vs bisection {}", k, v, v_ref);
+            prop_assert!((v_i - v_ref).abs() <= 1e-9, "sample {}: IHC {} vs bisection {}", k, v_i, v_ref);
+        }
+    }
+
+    /// Whatever it is fed (NaN, infinities, huge values, jumps), no compensator leaves its
+    /// limits or emits NaN; non-finite samples hold the previous output.
+    #[test]
+    fn no_compensator_leaves_its_limits_or_emits_nan(
+        seed in any::<u64>(),
+        inputs in prop::collection::vec(
+            prop_oneof![
+                4 => -0.5f64..1.5,
+                1 => Just(f64::NAN),
+                1 => Just(f64::INFINITY),
+                1 => Just(f64::NEG_INFINITY),
+                1 => any::<f64>(),
+                1 => Just(1e300),
+                1 => Just(-1e300),
+            ],
+            1..300,
+        ),
+        lo in -0.2f64..0.4,
+        width in 0.05f64..1.0,
+    ) {
+        let mut rng = rng(seed);
+        let plant = random_invertible_model(&mut rng, 8);
+        let inverse = table2();
+        let hi = lo + width;
+        let limits = OutputLimits::new(lo, hi).unwrap();
+        let mut compensators: Vec<(&str, Box<dyn Compensator<f64>>)> = Vec::new();
+        if let Ok(c) = Ihc::<f64, Vec<f64>>::new(&plant, limits, SolveMode::Exact) {
+            compensators.push(("ihc", Box::new(c)));
+        }
+        if let Ok(c) = Ihc::<f64, Vec<f64>>::new(&plant, limits, SolveMode::Delayed) {
+            compensators.push(("ihc-delayed", Box::new(c)));
+        }
+        if let Ok(c) = Wihc::<f64, Vec<f64>>::new(&plant, limits, SolveMode::Exact) {
+            compensators.push(("wihc", Box::new(c)));
+        }
+        if let Ok(c) = Wihc::<f64, Vec<f64>>::new(&plant, limits, SolveMode::Delayed) {
+            compensators.push(("wihc-delayed", Box::new(c)));
+        }
+        compensators.push(("dihc", Box::new(Dihc::<f64, Vec<f64>>::new(&inverse, 0.0, 1.0, limits).unwrap())));
+        for (name, c) in compensators.iter_mut() {
+            let mut previous = c.step(0.3);
+            let mut non_finite = 0;
+            for &y_d in &inputs {
+                let v = c.step(y_d);
+                prop_assert!(!v.is_nan(), "{} emitted NaN for {}", name, y_d);
+                prop_assert!(v >= lo && v <= hi, "{} emitted {} outside [{}, {}]", name, v, lo, hi);
+                if !y_d.is_finite() {
+                    non_finite += 1;
+                    prop_assert_eq!(v, previous, "{} must hold its output on {}", name, y_d);
+                }
+                previous = v;
+            }
+            prop_assert_eq!(c.diagnostics().non_finite, non_finite);
+        }
+    }
+}
+
+#[test]
+fn f32_compensators_invert_the_table1_plant() {
+    let r: Vec<f32> = TABLE1_R.iter().map(|&x| x as f32).collect();
+    let b: Vec<f32> = TABLE1_B.iter().map(|&x| x as f32).collect();
+    let plant: Mpim<f32, [f32; 10]> =
+        Mpim::new(&r, &b, TABLE1_A1 as f32, TABLE1_A2 as f32).unwrap();
+    let limits = OutputLimits::new(0.0f32, 1.0).unwrap();
+    let mut ihc: Ihc<f32, [f32; 10]> = Ihc::new(&plant, limits, SolveMode::Exact).unwrap();
+    let mut wihc: Wihc<f32, [f32; 10]> = Wihc::new(&plant, limits, SolveMode::Exact).unwrap();
+    let (mut p1, mut p2) = (plant.clone(), plant.clone());
+    let mut rng = rng(31);
+    let v = random_input(&mut rng, 2000, 0.0, 1.0);
+    let mut generator = plant.clone();
+    for &vk in &v {
+        let y_d = generator.step(vk as f32);
+        assert!((p1.step(ihc.step(y_d)) - y_d).abs() <= 2e-5);
+        assert!((p2.step(wihc.step(y_d)) - y_d).abs() <= 2e-5);
+    }
+}
+
+/// Max |v_delayed - v_exact| over a smooth trajectory sampled at `rate_hz`.
+fn delayed_gap(
+    make: &dyn Fn(SolveMode) -> Box<dyn Compensator<f64>>,
+    plant: &VecMpim,
+    rate_hz: f64,
+) -> f64 {
+    let mut exact = make(SolveMode::Exact);
+    let mut delayed = make(SolveMode::Delayed);
+    let mut p = plant.clone();
+    let samples = (2.0 * rate_hz) as usize;
+    let mut worst: f64 = 0.0;
+    for k in 0..samples {
+        let t = k as f64 / rate_hz;
+        // Starts at rest (v = 0) and has minor loops.
+        let v =
+            0.45 * (1.0 - (2.0 * std::f64::consts::PI * t).cos()) * (1.0 + 0.1 * (7.0 * t).sin());
+        let y_d = p.step(v);
+        worst = worst.max((exact.step(y_d) - delayed.step(y_d)).abs());
+    }
+    worst
+}
+
+#[test]
+fn delayed_variants_differ_by_a_bounded_amount_that_shrinks_with_the_sample_rate() {
+    let plant = table1();
+    let limits = unit_limits();
+    let ihc = |mode| -> Box<dyn Compensator<f64>> {
+        Box::new(Ihc::<f64, Vec<f64>>::new(&plant, limits, mode).unwrap())
+    };
+    let wihc = |mode| -> Box<dyn Compensator<f64>> {
+        Box::new(Wihc::<f64, Vec<f64>>::new(&plant, limits, mode).unwrap())
+    };
+    for (name, make) in [
+        ("ihc", &ihc as &dyn Fn(SolveMode) -> _),
+        ("wihc", &wihc as _),
+    ] {
+        let gaps: Vec<f64> = [200.0, 2_000.0, 20_000.0]
+            .iter()
+            .map(|&rate| delayed_gap(make, &plant, rate))
+            .collect();
+        eprintln!("{name}: max |v_delayed - v_exact| at 200 Hz, 2 kHz, 20 kHz = {gaps:?}");
+        assert!(gaps[0] < 0.05, "{name}: gap {gaps:?} not bounded");
+        assert!(gaps[0] > 0.0, "{name}: the delayed variant should differ");
+        assert!(
+            gaps[1] < gaps[0] / 4.0 && gaps[2] < gaps[1] / 4.0,
+            "{name}: {gaps:?}"
+        );
+    }
+}
+
+#[test]
+fn dihc_is_the_inverse_model_evaluated_on_the_clamped_desired_position() {
+    let mut model = table2();
+    let limits = OutputLimits::new(-0.5, 1.5).unwrap();
+    let mut dihc: Dihc<f64, Vec<f64>> = Dihc::new(&model, 0.0, 1.0, limits).unwrap();
+    let mut rng = rng(41);
+    let desired = random_input(&mut rng, 2000, -0.2, 1.2);
+    let mut clamped = 0;
+    for &y_d in &desired {
+        let x = y_d.clamp(0.0, 1.0);
+        if x != y_d {
+            clamped += 1;
+        }
+        assert_eq!(dihc.step(y_d), model.step(x).clamp(-0.5, 1.5));
+    }
+    assert!(clamped > 0);
+    assert_eq!(dihc.diagnostics().saturated, clamped);
+}
+
+#[test]
+fn dihc_eq10_uses_a2_not_a1() {
+    // ERRATA item 1: from zero memory, a monotone rise to y gives
+    // a1 y^3 + a2 y + sum b_i max(y - r_i, 0).
+    let mut dihc: Dihc<f64, Vec<f64>> =
+        Dihc::new(&table2(), 0.0, 1.0, OutputLimits::new(-2.0, 2.0).unwrap()).unwrap();
+    let y = 0.55;
+    for k in 1..=100 {
+        dihc.step(y * k as f64 / 100.0);
+    }
+    let expected = TABLE2_A1 * y * y * y
+        + TABLE2_A2 * y
+        + TABLE1_R
+            .iter()
+            .zip(TABLE2_B)
+            .map(|(r, b)| b * (y - r).max(0.0))
+            .sum::<f64>();
+    assert!((dihc.step(y) - expected).abs() < 1e-12);
+}
+
+#[test]
+fn non_invertible_models_are_refused_by_every_compensator() {
+    let mut b = TABLE1_B;
+    b[0] = 0.0;
+    let bad: VecMpim = Mpim::new(&TABLE1_R, &b, -0.3, TABLE1_A2).unwrap();
+    let limits = unit_limits();
+    for mode in [SolveMode::Exact, SolveMode::Delayed] {
+        assert!(matches!(
+            Ihc::<f64, Vec<f64>>::new(&bad, limits, mode),
+            Err(CoreError::NotInvertible { .. })
+        ));
+        assert!(matches!(
+            Wihc::<f64, Vec<f64>>::new(&bad, limits, mode),
+            Err(CoreError::NotInvertible { .. })
+        ));
+    }
+    assert!(matches!(
+        Dihc::<f64, Vec<f64>>::new(&bad, 0.0, 1.0, limits),
+        Err(CoreError::NotInvertible { .. })
+    ));
+    // Narrowing the range to where the model is increasing makes it acceptable.
+    assert!(
+        Wihc::<f64, Vec<f64>>::new(&bad, OutputLimits::new(0.0, 0.5).unwrap(), SolveMode::Exact)
+            .is_ok()
+    );
+}
+
+#[test]
+fn delayed_wihc_refuses_a_model_whose_loop_diverges() {
+    // b_1 (r = 0) larger than a2: v(t) = (y_d - b_1 v(t - Ts) - ...) / a2 oscillates and grows.
+    let m: VecMpim = Mpim::new(&[0.0, 0.5], &[0.8, 0.1], 0.0, 0.5).unwrap();
+    let err = Wihc::<f64, Vec<f64>>::new(&m, unit_limits(), SolveMode::Delayed).unwrap_err();
+    assert!(
+        matches!(err, CoreError::DelayedWihcUnstable { .. }),
+        "{err:?}"
+    );
+    assert!(Wihc::<f64, Vec<f64>>::new(&m, unit_limits(), SolveMode::Exact).is_ok());
+}
+
+#[test]
+fn process_refuses_mismatched_lengths_and_equals_step() {
+    let plant = table1();
+    let mut a: VecIhc = Ihc::new(&plant, unit_limits(), SolveMode::Exact).unwrap();
+    let mut b = a.clone();
+    let mut rng = rng(51);
+    let desired = random_input(&mut rng, 300, 0.0, 0.9);
+    let mut out = vec![0.0; 299];
+    assert!(matches!(
+        a.process(&desired, &mut out),
+        Err(CoreError::LengthMismatch { .. })
+    ));
+    let mut out = vec![0.0; 300];
+    a.process(&desired, &mut out).unwrap();
+    for (y_d, v) in desired.iter().zip(&out) {
+        assert_eq!(b.step(*y_d), *v);
+    }
+    // reset returns to the initial state.
+    a.reset();
+    let mut again = vec![0.0; 300];
+    a.process(&desired, &mut again).unwrap();
+    assert_eq!(out, again);
+}
+
+#[test]
+fn limits_are_validated() {
+    assert!(OutputLimits::new(1.0, 0.0).is_err());
+    assert!(OutputLimits::new(0.0, 0.0).is_err());
+    assert!(OutputLimits::new(f64::NAN, 1.0).is_err());
+    assert!(OutputLimits::new(0.0, f64::INFINITY).is_err());
+}
+
+#[test]
+fn ihc_exposes_the_eq7_inverse_it_runs() {
+    let plant = table1();
+    let ihc: VecIhc = Ihc::new(&plant, unit_limits(), SolveMode::Exact).unwrap();
+    let from_model = plant.pi_part_inverse().unwrap();
+    let inside = ihc.pi_part_inverse().unwrap();
+    assert_eq!(inside.thresholds(), from_model.thresholds());
+    assert_eq!(inside.weights(), from_model.weights());
+    let _ = rng(0).random::<f64>();
+}
