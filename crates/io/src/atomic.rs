@@ -1,1 +1,114 @@
-//! Atomic file writes (to be filled in).
+//! Files written atomically: a reader (or a crash) sees either the old file or the new one,
+//! never a partial file.
+//!
+//! [`write_atomic`] writes the contents to a temporary file in the target's directory (the
+//! same file system, so the final rename is atomic), flushes it to disk, renames it over the
+//! target and flushes the directory. Model files, results and figures all go through it.
+
+use std::fs;
+use std::io::{self, Write};
+use std::path::{Path, PathBuf};
+
+/// How many bytes of the target's name the temporary file's name keeps, so that it stays
+/// within file-name length limits.
+const NAME_PREFIX_LIMIT: usize = 64;
+
+/// Writes `contents` to `path` atomically: to a temporary file `.NAME.XXXXXX.tmp` in the same
+/// directory, flushed to disk (`fsync`), then renamed over `path`, and the directory flushed.
+///
+/// - On any error the file at `path` is left as it was and the temporary file is removed.
+/// - An existing file keeps its permissions; a new file gets the usual permissions for new
+///   files (`0o666` less the umask on Unix).
+/// - When `path` is a symbolic link, the file it points to is replaced and the link kept.
+/// - A directory at `path` is refused ([`io::ErrorKind::IsADirectory`]).
+///
+/// Errors name the path: `could not write out/model.json: ...`.
+pub fn write_atomic(path: &Path, contents: &[u8]) -> io::Result<()> {
+    let context = |error: io::Error| {
+        io::Error::new(
+            error.kind(),
+            format!("could not write {}: {error}", path.display()),
+        )
+    };
+    let target = resolve_link(path).map_err(context)?;
+    write_replacing(&target, contents).map_err(context)
+}
+
+/// The file a symbolic link points to (following chains of links), or `path` itself.
+fn resolve_link(path: &Path) -> io::Result<PathBuf> {
+    let mut target = path.to_owned();
+    // A bound on the chain, as the operating system has one (ELOOP).
+    for _ in 0..40 {
+        match fs::symlink_metadata(&target) {
+            Ok(meta) if meta.file_type().is_symlink() => {
+                let link = fs::read_link(&target)?;
+                target = match target.parent() {
+                    Some(dir) if link.is_relative() => dir.join(link),
+                    _ => link,
+                };
+            }
+            _ => return Ok(target),
+        }
+    }
+    Err(io::Error::other("too many levels of symbolic links"))
+}
+
+fn write_replacing(target: &Path, contents: &[u8]) -> io::Result<()> {
+    let file_name = target.file_name().ok_or_else(|| {
+        io::Error::new(
+            io::ErrorKind::InvalidInput,
+            "the path does not end in a file name",
+        )
+    })?;
+    let dir = match target.parent() {
+        Some(dir) if !dir.as_os_str().is_empty() => dir,
+        _ => Path::new("."),
+    };
+    let existing = match fs::metadata(target) {
+        Ok(meta) if meta.is_dir() => {
+            return Err(io::Error::new(
+                io::ErrorKind::IsADirectory,
+                "it is a directory; give a file name",
+            ));
+        }
+        Ok(meta) => Some(meta.permissions()),
+        Err(error) if error.kind() == io::ErrorKind::NotFound => None,
+        Err(error) => return Err(error),
+    };
+
+    let name = file_name.to_string_lossy();
+    let mut cut = name.len().min(NAME_PREFIX_LIMIT);
+    while !name.is_char_boundary(cut) {
+        cut -= 1;
+    }
+    let prefix = format!(".{}.", &name[..cut]);
+    let mut builder = tempfile::Builder::new();
+    builder.prefix(&prefix).suffix(".tmp");
+    #[cfg(unix)]
+    if existing.is_none() {
+        use std::os::unix::fs::PermissionsExt;
+        // Applied at creation, so the umask narrows it as for any new file.
+        builder.permissions(fs::Permissions::from_mode(0o666));
+    }
+    // Dropping `temporary` on any early return removes the temporary file.
+    let mut temporary = builder.tempfile_in(dir)?;
+    if let Some(permissions) = existing {
+        temporary.as_file().set_permissions(permissions)?;
+    }
+    temporary.write_all(contents)?;
+    temporary.as_file().sync_all()?;
+    temporary.persist(target).map_err(|error| error.error)?;
+    sync_directory(dir)
+}
+
+/// Flushes a directory entry change (the rename) to disk where the platform allows it.
+#[cfg(unix)]
+fn sync_directory(dir: &Path) -> io::Result<()> {
+    fs::File::open(dir)?.sync_all()
+}
+
+/// Flushes a directory entry change (the rename) to disk where the platform allows it.
+#[cfg(not(unix))]
+fn sync_directory(_dir: &Path) -> io::Result<()> {
+    Ok(())
+}

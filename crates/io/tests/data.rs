@@ -1,0 +1,1573 @@
+//! Tests of reading records (text and MATLAB Level-5), writing CSV, the checks, and atomic
+//! writes.
+
+use std::fs;
+use std::path::{Path, PathBuf};
+
+use hystcomp_io::atomic::write_atomic;
+use hystcomp_io::data::{
+    Column, Columns, DataError, Delimiter, Header, ReadOptions, RowRange, check_finite,
+    check_min_samples, check_not_constant, check_same_length, check_time_increasing, read_columns,
+    write_csv, write_delimited,
+};
+use proptest::prelude::*;
+use proptest::test_runner::{Config, RngSeed};
+
+// ---------------------------------------------------------------------------------------------
+// Helpers
+// ---------------------------------------------------------------------------------------------
+
+fn dir() -> tempfile::TempDir {
+    tempfile::tempdir().expect("a temporary directory")
+}
+
+fn file(dir: &Path, name: &str, contents: impl AsRef<[u8]>) -> PathBuf {
+    let path = dir.join(name);
+    fs::write(&path, contents).expect("writing a test file");
+    path
+}
+
+fn read(path: &Path, columns: &[&str]) -> Result<Columns, DataError> {
+    read_with(path, columns, &ReadOptions::default())
+}
+
+fn read_with(path: &Path, columns: &[&str], options: &ReadOptions) -> Result<Columns, DataError> {
+    let columns: Vec<Column> = columns
+        .iter()
+        .map(|c| c.parse().expect("a valid column"))
+        .collect();
+    read_columns(path, &columns, options)
+}
+
+/// The error of a read that must fail, and its message.
+fn read_error(path: &Path, columns: &[&str], options: &ReadOptions) -> (DataError, String) {
+    match read_with(path, columns, options) {
+        Ok(columns) => panic!("reading {columns:?} should have failed"),
+        Err(error) => {
+            let message = error.to_string();
+            (error, message)
+        }
+    }
+}
+
+fn assert_contains(message: &str, parts: &[&str]) {
+    for part in parts {
+        assert!(
+            message.contains(part),
+            "message {message:?} should mention {part:?}"
+        );
+    }
+}
+
+/// The names of the entries of a directory, sorted.
+fn entries(dir: &Path) -> Vec<String> {
+    let mut names: Vec<String> = fs::read_dir(dir)
+        .expect("listing a directory")
+        .map(|e| {
+            e.expect("an entry")
+                .file_name()
+                .to_string_lossy()
+                .into_owned()
+        })
+        .collect();
+    names.sort();
+    names
+}
+
+fn bits(values: &[f64]) -> Vec<u64> {
+    values.iter().map(|v| v.to_bits()).collect()
+}
+
+const ALL_DELIMITERS: [Delimiter; 4] = [
+    Delimiter::Comma,
+    Delimiter::Tab,
+    Delimiter::Semicolon,
+    Delimiter::Whitespace,
+];
+
+// ---------------------------------------------------------------------------------------------
+// Round trips (property tests, fixed seed)
+// ---------------------------------------------------------------------------------------------
+
+fn seeded(cases: u32, seed: u64) -> Config {
+    Config {
+        cases,
+        rng_seed: RngSeed::Fixed(seed),
+        failure_persistence: None,
+        ..Config::default()
+    }
+}
+
+/// Any finite f64, from subnormals to the largest, plus values of everyday size.
+fn finite() -> impl Strategy<Value = f64> {
+    prop_oneof![
+        prop::num::f64::POSITIVE
+            | prop::num::f64::NEGATIVE
+            | prop::num::f64::NORMAL
+            | prop::num::f64::SUBNORMAL
+            | prop::num::f64::ZERO,
+        -1e3..1e3_f64,
+        (-100_000i32..100_000).prop_map(|k| f64::from(k) / 1000.0),
+    ]
+}
+
+/// 1 to 4 columns of 1 to 30 finite values each, all of one length.
+fn table() -> impl Strategy<Value = Vec<Vec<f64>>> {
+    (1usize..=4, 1usize..=30).prop_flat_map(|(columns, rows)| {
+        prop::collection::vec(prop::collection::vec(finite(), rows), columns)
+    })
+}
+
+proptest! {
+    #![proptest_config(seeded(64, 0x6879_7374_636f_6d70))]
+
+    #[test]
+    fn written_columns_read_back_exactly_with_every_delimiter_and_header(
+        table in table(),
+        delimiter_index in 0usize..4,
+        with_header in any::<bool>(),
+        auto_detect in any::<bool>(),
+        suffix in "[a-z]{0,6}",
+    ) {
+        let delimiter = ALL_DELIMITERS[delimiter_index];
+        let dir = dir();
+        let path = dir.path().join("round-trip.txt");
+        let names: Vec<String> = (0..table.len()).map(|i| format!("c{i}_{suffix}")).collect();
+        let header: Vec<&str> = if with_header {
+            names.iter().map(String::as_str).collect()
+        } else {
+            Vec::new()
+        };
+        let slices: Vec<&[f64]> = table.iter().map(Vec::as_slice).collect();
+        write_delimited(&path, &header, &slices, delimiter).expect("writing");
+
+        let options = if auto_detect {
+            ReadOptions::default()
+        } else {
+            ReadOptions {
+                delimiter,
+                header: if with_header { Header::Present } else { Header::Absent },
+                rows: None,
+            }
+        };
+        let by_index: Vec<Column> = (1..=table.len()).map(Column::Index).collect();
+        let read = read_columns(&path, &by_index, &options).expect("reading back");
+        prop_assert_eq!(read.values.len(), table.len());
+        for (got, written) in read.values.iter().zip(&table) {
+            prop_assert_eq!(bits(got), bits(written));
+        }
+        prop_assert_eq!(read.first_row, 1);
+        prop_assert_eq!(read.len(), table[0].len());
+        if with_header {
+            prop_assert_eq!(&read.names, &names);
+            // Selecting by name gives the same columns as selecting by index.
+            let by_name: Vec<Column> = names.iter().rev().map(|n| Column::Name(n.clone())).collect();
+            let read_by_name = read_columns(&path, &by_name, &options).expect("reading by name");
+            for (got, expected) in read_by_name.values.iter().zip(read.values.iter().rev()) {
+                prop_assert_eq!(bits(got), bits(expected));
+            }
+        } else {
+            let expected: Vec<String> = (1..=table.len()).map(|k| format!("column {k}")).collect();
+            prop_assert_eq!(&read.names, &expected);
+        }
+    }
+
+    #[test]
+    fn a_row_range_reads_exactly_those_rows(
+        table in table(),
+        a in 0usize..30,
+        b in 0usize..30,
+        open_end in any::<bool>(),
+    ) {
+        let rows = table[0].len();
+        let (first, last) = (a.min(b) % rows + 1, a.max(b) % rows + 1);
+        let (first, last) = (first.min(last), first.max(last));
+        let dir = dir();
+        let path = dir.path().join("range.csv");
+        let slices: Vec<&[f64]> = table.iter().map(Vec::as_slice).collect();
+        write_csv(&path, &[], &slices).expect("writing");
+        let range = RowRange::new(first, if open_end { None } else { Some(last) }).expect("a range");
+        let end = if open_end { rows } else { last };
+        let options = ReadOptions { rows: Some(range), ..ReadOptions::default() };
+        let read = read_columns(&path, &[Column::Index(1)], &options).expect("reading a range");
+        prop_assert_eq!(bits(&read.values[0]), bits(&table[0][first - 1..end]));
+        prop_assert_eq!(read.first_row, first);
+        prop_assert_eq!(read.file_row(1), first);
+    }
+}
+
+#[test]
+fn write_csv_writes_the_shortest_exact_text() {
+    let dir = dir();
+    let path = dir.path().join("out.csv");
+    write_csv(
+        &path,
+        &["time_s", "voltage, V"],
+        &[&[0.0, 0.005, 1e-7], &[1.8, -0.0, 1e300]],
+    )
+    .expect("writing");
+    let text = fs::read_to_string(&path).expect("reading the text");
+    assert_eq!(
+        text,
+        "time_s,\"voltage, V\"\n0.0,1.8\n0.005,-0.0\n1e-7,1e300\n"
+    );
+    let read = read(&path, &["voltage, V"]).expect("reading a quoted name back");
+    assert_eq!(bits(&read.values[0]), bits(&[1.8, -0.0, 1e300]));
+}
+
+// ---------------------------------------------------------------------------------------------
+// Text formats accepted
+// ---------------------------------------------------------------------------------------------
+
+#[test]
+fn comments_blank_lines_bom_and_crlf_are_accepted() {
+    let dir = dir();
+    let path = file(
+        dir.path(),
+        "logger.csv",
+        "\u{feff}# recorded 2024-05-01\r\n% sample rate 200 Hz\r\n\r\ntime, Voltage (V) ,\"Position, um\"\r\n0.000,1.5,-3\r\n   \r\n  # a note in the middle\r\n0.005,1.6,-2.5\r\n",
+    );
+    let read = read(&path, &["Position, um", "2", "time"]).expect("reading");
+    assert_eq!(read.names, ["Position, um", "Voltage (V)", "time"]);
+    assert_eq!(
+        read.values,
+        vec![vec![-3.0, -2.5], vec![1.5, 1.6], vec![0.0, 0.005]]
+    );
+}
+
+#[test]
+fn whitespace_aligned_columns_are_read() {
+    let dir = dir();
+    let path = file(
+        dir.path(),
+        "aligned.txt",
+        "  t      u        y\n  0.0    1.0e+00  -2\n  0.5   -1.5e-01   4.25\n",
+    );
+    let read = read(&path, &["y", "u"]).expect("reading");
+    assert_eq!(read.values, vec![vec![-2.0, 4.25], vec![1.0, -0.15]]);
+}
+
+#[test]
+fn semicolon_files_and_names_ignoring_case_are_read() {
+    let dir = dir();
+    let path = file(dir.path(), "semi.csv", "Time;Voltage\n0;1.25\n1;2.5\n");
+    let read = read(&path, &["voltage"]).expect("reading");
+    assert_eq!(read.names, ["Voltage"]);
+    assert_eq!(read.values, vec![vec![1.25, 2.5]]);
+}
+
+#[test]
+fn text_in_columns_not_selected_is_allowed() {
+    let dir = dir();
+    let path = file(
+        dir.path(),
+        "mixed.csv",
+        "when,u\n2024-05-01T10:00,1\n2024-05-01T10:01,2\n",
+    );
+    let read = read(&path, &["u"]).expect("reading");
+    assert_eq!(read.values, vec![vec![1.0, 2.0]]);
+}
+
+#[test]
+fn header_can_be_forced_present_or_absent() {
+    let dir = dir();
+    // Numeric names: auto-detection sees data, "present" sees names.
+    let path = file(dir.path(), "numeric-names.csv", "1,2\n10,20\n11,21\n");
+    let auto = read(&path, &["2"]).expect("auto");
+    assert_eq!(auto.values, vec![vec![2.0, 20.0, 21.0]]);
+    let present = ReadOptions {
+        header: Header::Present,
+        ..ReadOptions::default()
+    };
+    let forced = read_with(&path, &["2"], &present).expect("present");
+    assert_eq!(forced.values, vec![vec![20.0, 21.0]]);
+    assert_eq!(forced.names, ["2"]);
+
+    // A header declared absent is data, and its text is not a number.
+    let path = file(dir.path(), "named.csv", "u,y\n1,2\n");
+    let absent = ReadOptions {
+        header: Header::Absent,
+        ..ReadOptions::default()
+    };
+    let (error, message) = read_error(&path, &["1"], &absent);
+    assert!(
+        matches!(error, DataError::NotANumber { line: 1, .. }),
+        "{error:?}"
+    );
+    assert_contains(&message, &["named.csv", "line 1", "\"u\""]);
+}
+
+#[test]
+fn non_utf8_header_bytes_do_not_stop_the_numbers() {
+    let dir = dir();
+    // "Position (µm)" in Latin-1.
+    let path = file(
+        dir.path(),
+        "latin1.txt",
+        b"u\tPosition (\xb5m)\n1\t2\n3\t4\n",
+    );
+    let read = read(&path, &["2"]).expect("reading");
+    assert_eq!(read.values, vec![vec![2.0, 4.0]]);
+    assert!(read.names[0].starts_with("Position ("));
+}
+
+// ---------------------------------------------------------------------------------------------
+// Text formats refused
+// ---------------------------------------------------------------------------------------------
+
+#[test]
+fn a_missing_file_is_named() {
+    let dir = dir();
+    let path = dir.path().join("no-such-file.csv");
+    let (error, message) = read_error(&path, &["1"], &ReadOptions::default());
+    assert!(matches!(error, DataError::Read { .. }), "{error:?}");
+    assert!(std::error::Error::source(&error).is_some());
+    assert_contains(&message, &["no-such-file.csv", "check the path"]);
+}
+
+#[test]
+fn a_directory_is_not_a_file_to_read() {
+    let dir = dir();
+    let (error, message) = read_error(dir.path(), &["1"], &ReadOptions::default());
+    assert!(matches!(error, DataError::Read { .. }), "{error:?}");
+    assert_contains(&message, &[&dir.path().display().to_string()]);
+}
+
+#[test]
+fn files_without_rows_of_data_are_empty() {
+    let dir = dir();
+    for (name, contents) in [
+        ("zero.csv", ""),
+        ("blank.csv", "\n  \n\t\n"),
+        ("comments.csv", "# nothing\n% here\n"),
+        ("header-only.csv", "time,voltage\n# no data\n"),
+    ] {
+        let path = file(dir.path(), name, contents);
+        let (error, message) = read_error(&path, &["1"], &ReadOptions::default());
+        assert!(
+            matches!(error, DataError::Empty { .. }),
+            "{name}: {error:?}"
+        );
+        assert_contains(&message, &[name, "no rows of data"]);
+    }
+}
+
+#[test]
+fn ragged_rows_give_the_line_and_both_counts() {
+    let dir = dir();
+    let path = file(
+        dir.path(),
+        "ragged.dat",
+        "# comment\n1\t2\t3\n4\t5\t6\n\n7\t8\n",
+    );
+    let (error, message) = read_error(&path, &["1"], &ReadOptions::default());
+    assert!(
+        matches!(
+            error,
+            DataError::Ragged {
+                line: 5,
+                found: 2,
+                first_line: 2,
+                expected: 3,
+                delimiter: Delimiter::Tab,
+                ..
+            }
+        ),
+        "{error:?}"
+    );
+    assert_contains(
+        &message,
+        &["ragged.dat", "line 5", "2 fields", "line 2 has 3", "tabs"],
+    );
+}
+
+#[test]
+fn a_field_that_is_not_a_number_is_located() {
+    let dir = dir();
+    let path = file(dir.path(), "bad.csv", "t,u\n0,1\n1,oops\n");
+    let (error, message) = read_error(&path, &["u"], &ReadOptions::default());
+    assert!(
+        matches!(error, DataError::NotANumber { line: 3, .. }),
+        "{error:?}"
+    );
+    assert_contains(
+        &message,
+        &["bad.csv", "line 3", "\"u\" (column 2)", "\"oops\""],
+    );
+
+    let path = file(dir.path(), "comma.csv", "t;u\n0;1,5\n");
+    let (_, message) = read_error(&path, &["u"], &ReadOptions::default());
+    assert_contains(&message, &["\"1,5\"", "decimal commas"]);
+
+    let path = file(dir.path(), "gap.csv", "1,2\n3,\n");
+    let (_, message) = read_error(&path, &["2"], &ReadOptions::default());
+    assert_contains(&message, &["line 2", "column 2", "empty"]);
+}
+
+#[test]
+fn nan_and_infinite_values_are_refused_with_row_and_column() {
+    let dir = dir();
+    for (text, shown) in [
+        ("NaN", "NaN"),
+        ("-Inf", "-inf"),
+        ("inf", "inf"),
+        ("1e999", "inf"),
+    ] {
+        let path = file(
+            dir.path(),
+            "nan.csv",
+            format!("t,u\n# a comment\n0,1\n1,{text}\n"),
+        );
+        let (error, message) = read_error(&path, &["u"], &ReadOptions::default());
+        assert!(
+            matches!(
+                error,
+                DataError::NotFinite {
+                    line: Some(4),
+                    row: 2,
+                    ..
+                }
+            ),
+            "{text}: {error:?}"
+        );
+        assert_contains(&message, &["nan.csv", "line 4", "row 2", "\"u\"", shown]);
+    }
+}
+
+#[test]
+fn a_missing_column_lists_the_columns_that_exist() {
+    let dir = dir();
+    let path = file(dir.path(), "named.csv", "time,voltage,position\n0,1,2\n");
+    let (error, message) = read_error(&path, &["current"], &ReadOptions::default());
+    assert!(
+        matches!(error, DataError::NoSuchColumn { header: true, .. }),
+        "{error:?}"
+    );
+    assert_contains(
+        &message,
+        &[
+            "named.csv",
+            "\"current\"",
+            "3 columns",
+            "1 \"time\"",
+            "2 \"voltage\"",
+            "3 \"position\"",
+        ],
+    );
+
+    let (error, message) = read_error(&path, &["7"], &ReadOptions::default());
+    assert!(matches!(error, DataError::NoSuchColumn { .. }), "{error:?}");
+    assert_contains(&message, &["no column 7", "3 \"position\""]);
+
+    let path = file(dir.path(), "plain.dat", "0\t1\n2\t3\n");
+    let (error, message) = read_error(&path, &["voltage"], &ReadOptions::default());
+    assert!(
+        matches!(error, DataError::NoSuchColumn { header: false, .. }),
+        "{error:?}"
+    );
+    assert_contains(
+        &message,
+        &["plain.dat", "\"voltage\"", "no header", "1 to 2"],
+    );
+}
+
+#[test]
+fn names_match_exactly_first_then_ignoring_case_when_unique() {
+    let dir = dir();
+    let path = file(dir.path(), "case.csv", "u,y,U\n1,2,3\n");
+    let read = read(&path, &["u", "U", "Y"]).expect("exact names, then a unique case match");
+    assert_eq!(read.values, vec![vec![1.0], vec![3.0], vec![2.0]]);
+    assert_eq!(read.names, ["u", "U", "y"]);
+
+    let path = file(dir.path(), "dup.csv", "u,y,u\n1,2,3\n");
+    let (error, message) = read_error(&path, &["u"], &ReadOptions::default());
+    assert!(
+        matches!(error, DataError::AmbiguousColumn { .. }),
+        "{error:?}"
+    );
+    assert_contains(&message, &["dup.csv", "\"u\"", "1, 3", "by number"]);
+
+    let path = file(dir.path(), "cases.csv", "Uy,uY\n1,2\n");
+    let (error, message) = read_error(&path, &["uy"], &ReadOptions::default());
+    assert!(
+        matches!(error, DataError::AmbiguousColumn { .. }),
+        "{error:?}"
+    );
+    assert_contains(&message, &["\"uy\"", "1, 2"]);
+}
+
+#[test]
+fn a_row_range_outside_the_file_is_refused() {
+    let dir = dir();
+    let path = file(dir.path(), "short.csv", "u\n1\n2\n3\n");
+    for range in ["2..4", "4..", "5..9"] {
+        let options = ReadOptions {
+            rows: Some(range.parse().expect("a range")),
+            ..ReadOptions::default()
+        };
+        let (error, message) = read_error(&path, &["u"], &options);
+        assert!(
+            matches!(error, DataError::RowsOutOfRange { available: 3, .. }),
+            "{range}: {error:?}"
+        );
+        assert_contains(&message, &["short.csv", range, "3 rows of data"]);
+    }
+    let options = ReadOptions {
+        rows: Some("2..3".parse().expect("a range")),
+        ..ReadOptions::default()
+    };
+    let read = read_with(&path, &["u"], &options).expect("an inside range");
+    assert_eq!(read.values, vec![vec![2.0, 3.0]]);
+    assert_eq!(read.first_row, 2);
+}
+
+#[test]
+fn only_selected_rows_need_numbers_but_all_rows_need_their_fields() {
+    let dir = dir();
+    let path = file(dir.path(), "tail.csv", "u,y\n1,2\n3,4\nNaN,junk\n");
+    let options = ReadOptions {
+        rows: Some(RowRange::new(1, Some(2)).expect("a range")),
+        ..ReadOptions::default()
+    };
+    let read = read_with(&path, &["u", "y"], &options).expect("rows before the bad one");
+    assert_eq!(read.values, vec![vec![1.0, 3.0], vec![2.0, 4.0]]);
+
+    let path = file(dir.path(), "truncated.csv", "u,y\n1,2\n3,4\n5\n");
+    let (error, _) = read_error(&path, &["u"], &options);
+    assert!(
+        matches!(error, DataError::Ragged { line: 4, .. }),
+        "{error:?}"
+    );
+}
+
+#[test]
+fn a_binary_file_is_not_taken_for_text() {
+    let dir = dir();
+    let path = file(dir.path(), "photo.png", b"\x89PNG\r\n\x1a\n\0\0\0\rIHDR");
+    let (error, message) = read_error(&path, &["1"], &ReadOptions::default());
+    assert!(
+        matches!(error, DataError::UnsupportedFormat { .. }),
+        "{error:?}"
+    );
+    assert_contains(&message, &["photo.png", "binary"]);
+}
+
+#[test]
+fn selections_that_cannot_be_used_are_refused() {
+    let dir = dir();
+    let path = file(dir.path(), "ok.csv", "1,2\n");
+    let error = read_columns(&path, &[], &ReadOptions::default()).expect_err("no columns");
+    assert!(matches!(
+        error,
+        DataError::InvalidArgument {
+            what: "columns",
+            ..
+        }
+    ));
+    let error =
+        read_columns(&path, &[Column::Index(0)], &ReadOptions::default()).expect_err("column 0");
+    assert!(matches!(
+        error,
+        DataError::InvalidArgument { what: "column", .. }
+    ));
+    assert_contains(&error.to_string(), &["counted from 1"]);
+    let options = ReadOptions {
+        rows: Some(RowRange {
+            first: 0,
+            last: None,
+        }),
+        ..ReadOptions::default()
+    };
+    let error = read_columns(&path, &[Column::Index(1)], &options).expect_err("row 0");
+    assert!(matches!(
+        error,
+        DataError::InvalidArgument {
+            what: "row range",
+            ..
+        }
+    ));
+}
+
+// ---------------------------------------------------------------------------------------------
+// Parsing selections and options
+// ---------------------------------------------------------------------------------------------
+
+#[test]
+fn columns_parse_as_numbers_from_one_or_names() {
+    assert_eq!("3".parse::<Column>().ok(), Some(Column::Index(3)));
+    assert_eq!(" 12 ".parse::<Column>().ok(), Some(Column::Index(12)));
+    assert_eq!(
+        "voltage".parse::<Column>().ok(),
+        Some(Column::Name("voltage".to_owned()))
+    );
+    assert_eq!(
+        "data:2".parse::<Column>().ok(),
+        Some(Column::Name("data:2".to_owned()))
+    );
+    for bad in ["0", "-1", "", "  ", "99999999999999999999999"] {
+        let error = bad.parse::<Column>().expect_err(bad);
+        assert!(
+            matches!(error, DataError::InvalidArgument { what: "column", .. }),
+            "{bad}"
+        );
+    }
+    assert_contains(
+        &"0".parse::<Column>().unwrap_err().to_string(),
+        &["counted from 1"],
+    );
+    for text in ["7", "voltage"] {
+        let column: Column = text.parse().expect("a column");
+        assert_eq!(column.to_string(), text);
+    }
+}
+
+#[test]
+fn row_ranges_parse_inclusive_from_one() {
+    let parse = |text: &str| text.parse::<RowRange>();
+    assert_eq!(parse("101..200").ok(), RowRange::new(101, Some(200)).ok());
+    assert_eq!(parse("101..=200").ok(), RowRange::new(101, Some(200)).ok());
+    assert_eq!(parse("5..").ok(), RowRange::new(5, None).ok());
+    assert_eq!(parse("..7").ok(), RowRange::new(1, Some(7)).ok());
+    assert_eq!(parse(" 3..3 ").ok(), RowRange::new(3, Some(3)).ok());
+    for bad in ["0..5", "5..3", "abc", "5", "a..b", "-1..4"] {
+        let error = parse(bad).expect_err(bad);
+        assert!(
+            matches!(
+                error,
+                DataError::InvalidArgument {
+                    what: "row range",
+                    ..
+                }
+            ),
+            "{bad}: {error:?}"
+        );
+        assert_contains(&error.to_string(), &[bad.trim()]);
+    }
+    assert!(RowRange::new(0, None).is_err());
+    assert!(RowRange::new(4, Some(3)).is_err());
+    let range = RowRange::new(101, Some(200)).expect("a range");
+    assert_eq!(range.to_string().parse::<RowRange>().ok(), Some(range));
+}
+
+#[test]
+fn delimiter_and_header_settings_parse() {
+    for (text, delimiter) in [
+        ("auto", Delimiter::Auto),
+        ("Comma", Delimiter::Comma),
+        (",", Delimiter::Comma),
+        ("tab", Delimiter::Tab),
+        ("\t", Delimiter::Tab),
+        ("\\t", Delimiter::Tab),
+        ("semicolon", Delimiter::Semicolon),
+        ("whitespace", Delimiter::Whitespace),
+        (" ", Delimiter::Whitespace),
+    ] {
+        assert_eq!(text.parse::<Delimiter>().ok(), Some(delimiter), "{text:?}");
+        assert_eq!(
+            delimiter.to_string().parse::<Delimiter>().ok(),
+            Some(delimiter)
+        );
+    }
+    assert!("pipe".parse::<Delimiter>().is_err());
+    for (text, header) in [
+        ("auto", Header::Auto),
+        ("present", Header::Present),
+        ("ABSENT", Header::Absent),
+    ] {
+        assert_eq!(text.parse::<Header>().ok(), Some(header));
+        assert_eq!(header.to_string().parse::<Header>().ok(), Some(header));
+    }
+    assert_contains(
+        &"maybe".parse::<Header>().unwrap_err().to_string(),
+        &["maybe", "auto, present, absent"],
+    );
+    assert_eq!(ReadOptions::default().delimiter, Delimiter::Auto);
+    assert_eq!(ReadOptions::default().header, Header::Auto);
+    assert_eq!(ReadOptions::default().rows, None);
+}
+
+// ---------------------------------------------------------------------------------------------
+// Writing refused
+// ---------------------------------------------------------------------------------------------
+
+#[test]
+fn columns_of_different_lengths_are_not_written() {
+    let dir = dir();
+    let path = dir.path().join("uneven.csv");
+    let error = write_csv(&path, &["u", "y"], &[&[1.0, 2.0], &[1.0]]).expect_err("uneven");
+    assert!(
+        matches!(error, DataError::LengthMismatch { .. }),
+        "{error:?}"
+    );
+    assert_contains(&error.to_string(), &["uneven.csv", "u: 2", "y: 1"]);
+    assert!(!path.exists(), "nothing is written");
+}
+
+#[test]
+fn non_finite_values_are_not_written() {
+    let dir = dir();
+    let path = file(dir.path(), "keep.csv", "old\n1\n");
+    let error = write_csv(&path, &["u"], &[&[1.0, f64::NAN]]).expect_err("NaN");
+    assert!(
+        matches!(error, DataError::NotFinite { row: 2, .. }),
+        "{error:?}"
+    );
+    assert_contains(&error.to_string(), &["keep.csv", "u", "sample 2", "NaN"]);
+    assert_eq!(fs::read_to_string(&path).expect("old file"), "old\n1\n");
+}
+
+#[test]
+fn header_names_that_would_not_read_back_are_refused() {
+    let dir = dir();
+    let path = dir.path().join("names.csv");
+    let column: &[f64] = &[1.0];
+    for (header, delimiter, part) in [
+        (
+            vec!["a", "b"],
+            Delimiter::Comma,
+            "2 header names for 1 columns",
+        ),
+        (vec!["# u"], Delimiter::Comma, "comment"),
+        (vec!["1"], Delimiter::Comma, "read as data"),
+        (vec!["two words"], Delimiter::Whitespace, "spaces"),
+        (vec!["line\nbreak"], Delimiter::Tab, "line break"),
+    ] {
+        let columns = vec![column; if header.len() == 2 { 1 } else { header.len() }];
+        let error = write_delimited(&path, &header, &columns, delimiter).expect_err(part);
+        assert!(matches!(error, DataError::InvalidWrite { .. }), "{error:?}");
+        assert!(error.is_output());
+        assert_contains(&error.to_string(), &["names.csv", part]);
+    }
+    let error = write_csv(&path, &[], &[]).expect_err("no columns");
+    assert!(matches!(error, DataError::InvalidWrite { .. }));
+    assert!(!path.exists());
+}
+
+// ---------------------------------------------------------------------------------------------
+// Checks
+// ---------------------------------------------------------------------------------------------
+
+#[test]
+fn time_must_increase_strictly() {
+    assert!(check_time_increasing(&[]).is_ok());
+    assert!(check_time_increasing(&[0.0]).is_ok());
+    assert!(check_time_increasing(&[0.0, 0.005, 0.01]).is_ok());
+    for (time, sample) in [
+        (vec![0.0, 0.005, 0.005], 3),
+        (vec![0.0, 0.005, 0.002, 0.01], 3),
+        (vec![1.0, 0.0], 2),
+    ] {
+        match check_time_increasing(&time) {
+            Err(DataError::TimeNotIncreasing {
+                sample: s,
+                previous,
+                value,
+            }) => {
+                assert_eq!(s, sample);
+                assert_eq!(previous, time[sample - 2]);
+                assert_eq!(value, time[sample - 1]);
+                let message = check_time_increasing(&time).unwrap_err().to_string();
+                assert_contains(&message, &[&format!("sample {sample}"), "not increasing"]);
+            }
+            other => panic!("{time:?}: {other:?}"),
+        }
+    }
+    let error = check_time_increasing(&[0.0, f64::NAN, 1.0]).expect_err("NaN time");
+    assert!(
+        matches!(error, DataError::NotFinite { row: 2, .. }),
+        "{error:?}"
+    );
+}
+
+#[test]
+fn constant_columns_are_refused() {
+    assert!(check_not_constant("u", &[1.0, 1.0, 1.5]).is_ok());
+    let error = check_not_constant("input", &[1.8; 5]).expect_err("constant");
+    assert!(
+        matches!(error, DataError::Constant { samples: 5, value, .. } if value == 1.8),
+        "{error:?}"
+    );
+    assert_contains(
+        &error.to_string(),
+        &["input", "constant", "1.8", "5 samples"],
+    );
+    let error = check_not_constant("output", &[2.0]).expect_err("one sample");
+    assert!(matches!(
+        error,
+        DataError::TooFewSamples {
+            needed: 2,
+            got: 1,
+            ..
+        }
+    ));
+}
+
+#[test]
+fn too_few_samples_are_refused() {
+    assert!(check_min_samples(10, 10, "a model").is_ok());
+    let error =
+        check_min_samples(10, 9, "identification of 10 play operators").expect_err("too few");
+    assert!(matches!(
+        error,
+        DataError::TooFewSamples {
+            needed: 10,
+            got: 9,
+            ..
+        }
+    ));
+    assert_contains(
+        &error.to_string(),
+        &[
+            "identification of 10 play operators",
+            "9 given",
+            "10 needed",
+        ],
+    );
+}
+
+#[test]
+fn finite_and_same_length_checks_name_the_column() {
+    assert!(check_finite("u", &[0.0, -1e300, 5e-324]).is_ok());
+    let error = check_finite("output", &[0.0, 1.0, f64::INFINITY]).expect_err("inf");
+    assert!(matches!(
+        error,
+        DataError::NotFinite {
+            row: 3,
+            path: None,
+            ..
+        }
+    ));
+    assert_contains(&error.to_string(), &["output", "sample 3", "inf"]);
+
+    assert!(check_same_length(&[("u", &[1.0, 2.0]), ("y", &[3.0, 4.0])]).is_ok());
+    assert!(check_same_length(&[]).is_ok());
+    let error =
+        check_same_length(&[("u", &[1.0, 2.0]), ("y", &[3.0])]).expect_err("different lengths");
+    assert_contains(&error.to_string(), &["u: 2", "y: 1"]);
+}
+
+#[test]
+fn errors_can_cross_threads_and_tell_input_from_output() {
+    fn send_sync<T: Send + Sync + 'static>() {}
+    send_sync::<DataError>();
+    let input = check_min_samples(2, 1, "x").unwrap_err();
+    assert!(!input.is_output());
+}
+
+// ---------------------------------------------------------------------------------------------
+// MATLAB Level-5 files, written by hand for the tests
+// ---------------------------------------------------------------------------------------------
+
+/// A tiny writer of MATLAB Level-5 MAT-files, following MathWorks' "MAT-File Format": a
+/// 128-byte header, then one miMATRIX data element per variable (array flags, dimensions,
+/// name, real part, imaginary part if complex), each sub-element padded to 8 bytes; or each
+/// variable wrapped in an miCOMPRESSED element holding a zlib stream (stored blocks).
+mod mat5 {
+    const MI_INT8: u32 = 1;
+    const MI_UINT8: u32 = 2;
+    const MI_INT16: u32 = 3;
+    const MI_INT32: u32 = 5;
+    const MI_UINT32: u32 = 6;
+    const MI_DOUBLE: u32 = 9;
+    const MI_MATRIX: u32 = 14;
+    const MI_COMPRESSED: u32 = 15;
+    const MX_DOUBLE_CLASS: u32 = 6;
+    const MX_INT16_CLASS: u32 = 10;
+    const MX_INT32_CLASS: u32 = 12;
+    const COMPLEX_FLAG: u32 = 0x0800;
+
+    pub enum Values<'a> {
+        Double(&'a [f64]),
+        /// A double array whose values fit in 8 bits, stored compactly as MATLAB does.
+        DoubleAsUInt8(&'a [u8]),
+        /// A double array whose values fit in 16 bits, stored compactly as MATLAB does.
+        DoubleAsInt16(&'a [i16]),
+        Int16(&'a [i16]),
+        Int32(&'a [i32]),
+        Complex(&'a [f64], &'a [f64]),
+    }
+
+    pub struct Variable<'a> {
+        pub name: &'a str,
+        pub dims: &'a [usize],
+        pub values: Values<'a>,
+    }
+
+    pub fn var<'a>(name: &'a str, dims: &'a [usize], values: &'a [f64]) -> Variable<'a> {
+        Variable {
+            name,
+            dims,
+            values: Values::Double(values),
+        }
+    }
+
+    struct Out {
+        bytes: Vec<u8>,
+        big_endian: bool,
+    }
+
+    impl Out {
+        fn u16(&mut self, v: u16) {
+            let b = if self.big_endian {
+                v.to_be_bytes()
+            } else {
+                v.to_le_bytes()
+            };
+            self.bytes.extend_from_slice(&b);
+        }
+        fn u32(&mut self, v: u32) {
+            let b = if self.big_endian {
+                v.to_be_bytes()
+            } else {
+                v.to_le_bytes()
+            };
+            self.bytes.extend_from_slice(&b);
+        }
+        fn i16(&mut self, v: i16) {
+            let b = if self.big_endian {
+                v.to_be_bytes()
+            } else {
+                v.to_le_bytes()
+            };
+            self.bytes.extend_from_slice(&b);
+        }
+        fn i32(&mut self, v: i32) {
+            let b = if self.big_endian {
+                v.to_be_bytes()
+            } else {
+                v.to_le_bytes()
+            };
+            self.bytes.extend_from_slice(&b);
+        }
+        fn f64(&mut self, v: f64) {
+            let b = if self.big_endian {
+                v.to_be_bytes()
+            } else {
+                v.to_le_bytes()
+            };
+            self.bytes.extend_from_slice(&b);
+        }
+        fn pad8(&mut self) {
+            while self.bytes.len() % 8 != 0 {
+                self.bytes.push(0);
+            }
+        }
+        /// A data element: tag (type, byte count), the data, padding to 8 bytes.
+        fn element(&mut self, data_type: u32, write: impl FnOnce(&mut Out)) {
+            let mut body = Out {
+                bytes: Vec::new(),
+                big_endian: self.big_endian,
+            };
+            write(&mut body);
+            self.u32(data_type);
+            self.u32(u32::try_from(body.bytes.len()).expect("a small element"));
+            self.bytes.extend_from_slice(&body.bytes);
+            self.pad8();
+        }
+    }
+
+    fn matrix(out: &mut Out, v: &Variable) {
+        out.element(MI_MATRIX, |m| {
+            let (class, flags) = match v.values {
+                Values::Double(_) | Values::DoubleAsUInt8(_) | Values::DoubleAsInt16(_) => {
+                    (MX_DOUBLE_CLASS, 0)
+                }
+                Values::Int16(_) => (MX_INT16_CLASS, 0),
+                Values::Int32(_) => (MX_INT32_CLASS, 0),
+                Values::Complex(..) => (MX_DOUBLE_CLASS, COMPLEX_FLAG),
+            };
+            m.element(MI_UINT32, |e| {
+                e.u32(class | flags);
+                e.u32(0);
+            });
+            m.element(MI_INT32, |e| {
+                for &d in v.dims {
+                    e.i32(i32::try_from(d).expect("a small dimension"));
+                }
+            });
+            m.element(MI_INT8, |e| e.bytes.extend_from_slice(v.name.as_bytes()));
+            match v.values {
+                Values::Double(values) => {
+                    m.element(MI_DOUBLE, |e| values.iter().for_each(|&x| e.f64(x)))
+                }
+                Values::DoubleAsUInt8(values) => {
+                    m.element(MI_UINT8, |e| e.bytes.extend_from_slice(values))
+                }
+                Values::DoubleAsInt16(values) | Values::Int16(values) => {
+                    m.element(MI_INT16, |e| values.iter().for_each(|&x| e.i16(x)))
+                }
+                Values::Int32(values) => {
+                    m.element(MI_INT32, |e| values.iter().for_each(|&x| e.i32(x)))
+                }
+                Values::Complex(re, im) => {
+                    m.element(MI_DOUBLE, |e| re.iter().for_each(|&x| e.f64(x)));
+                    m.element(MI_DOUBLE, |e| im.iter().for_each(|&x| e.f64(x)));
+                }
+            }
+        });
+    }
+
+    /// A zlib stream of stored (uncompressed) deflate blocks, per RFC 1950 and 1951.
+    fn zlib_stored(data: &[u8]) -> Vec<u8> {
+        let mut out = vec![0x78, 0x01];
+        let chunks: Vec<&[u8]> = if data.is_empty() {
+            vec![&[]]
+        } else {
+            data.chunks(65_535).collect()
+        };
+        for (i, chunk) in chunks.iter().enumerate() {
+            out.push(u8::from(i + 1 == chunks.len()));
+            let len = u16::try_from(chunk.len()).expect("a stored block");
+            out.extend_from_slice(&len.to_le_bytes());
+            out.extend_from_slice(&(!len).to_le_bytes());
+            out.extend_from_slice(chunk);
+        }
+        let (mut a, mut b) = (1u32, 0u32);
+        for &byte in data {
+            a = (a + u32::from(byte)) % 65_521;
+            b = (b + a) % 65_521;
+        }
+        out.extend_from_slice(&((b << 16) | a).to_be_bytes());
+        out
+    }
+
+    /// The 128-byte header: text, subsystem offset, version 0x0100, endian indicator.
+    fn header(out: &mut Out, text: &str, version: u16) {
+        let mut line = text.as_bytes().to_vec();
+        line.resize(116, b' ');
+        out.bytes.extend_from_slice(&line);
+        out.bytes.extend_from_slice(&[0; 8]);
+        out.u16(version);
+        // The characters 'M' and 'I' written as one 16-bit number: "IM" on a little-endian
+        // machine, "MI" on a big-endian one.
+        out.u16(u16::from_be_bytes(*b"MI"));
+    }
+
+    pub fn file(variables: &[Variable], big_endian: bool, compressed: bool) -> Vec<u8> {
+        let mut out = Out {
+            bytes: Vec::new(),
+            big_endian,
+        };
+        header(
+            &mut out,
+            "MATLAB 5.0 MAT-file, Platform: hystcomp tests, Created on: Mon Jan  1 00:00:00 2024",
+            0x0100,
+        );
+        for v in variables {
+            if compressed {
+                let mut inner = Out {
+                    bytes: Vec::new(),
+                    big_endian,
+                };
+                matrix(&mut inner, v);
+                let stream = zlib_stored(&inner.bytes);
+                out.u32(MI_COMPRESSED);
+                out.u32(u32::try_from(stream.len()).expect("a small stream"));
+                out.bytes.extend_from_slice(&stream);
+            } else {
+                matrix(&mut out, v);
+            }
+        }
+        out.bytes
+    }
+
+    /// The start of a v7.3 file: its header text and version 0x0200, then the HDF5
+    /// signature at offset 512.
+    pub fn v73_stub() -> Vec<u8> {
+        let mut out = Out {
+            bytes: Vec::new(),
+            big_endian: false,
+        };
+        header(
+            &mut out,
+            "MATLAB 7.3 MAT-file, Platform: GLNXA64, Created on: Mon Jan  1 00:00:00 2024 HDF5 schema 1.00 .",
+            0x0200,
+        );
+        out.bytes.resize(512, 0);
+        out.bytes.extend_from_slice(b"\x89HDF\r\n\x1a\n");
+        out.bytes.resize(1024, 0);
+        out.bytes
+    }
+}
+
+use mat5::{Values, Variable, var};
+
+#[test]
+fn level5_vectors_read_exactly_in_every_layout() {
+    let u = [1.8, 1.856_539, -0.0, 1e-300, 3.6];
+    let y = [-123.059_139, -120.0, -114.5, -100.25, -74.0];
+    let dir = dir();
+    for big_endian in [false, true] {
+        for compressed in [false, true] {
+            let path = file(
+                dir.path(),
+                "record.mat",
+                mat5::file(
+                    &[var("u", &[5, 1], &u), var("y", &[1, 5], &y)],
+                    big_endian,
+                    compressed,
+                ),
+            );
+            let read = read(&path, &["y", "u"]).unwrap_or_else(|e| {
+                panic!("big endian {big_endian}, compressed {compressed}: {e}")
+            });
+            assert_eq!(read.names, ["y", "u"]);
+            assert_eq!(bits(&read.values[0]), bits(&y));
+            assert_eq!(bits(&read.values[1]), bits(&u));
+        }
+    }
+}
+
+#[test]
+fn level5_files_are_found_by_content_whatever_the_extension() {
+    let dir = dir();
+    let path = file(
+        dir.path(),
+        "record.bin",
+        mat5::file(&[var("u", &[3, 1], &[1.0, 2.0, 3.0])], false, false),
+    );
+    let read = read(&path, &["u"]).expect("reading");
+    assert_eq!(read.values, vec![vec![1.0, 2.0, 3.0]]);
+}
+
+#[test]
+fn level5_matrix_columns_are_selected_as_name_colon_k() {
+    // data = [t u y] with 4 rows, stored column by column.
+    let data = [
+        0.0, 0.005, 0.01, 0.015, // t
+        1.0, 2.0, 3.0, 4.0, // u
+        -1.0, -2.0, -3.0, -4.0, // y
+    ];
+    let dir = dir();
+    let path = file(
+        dir.path(),
+        "data.mat",
+        mat5::file(&[var("data", &[4, 3], &data)], false, false),
+    );
+    let read = read(&path, &["data:3", "data:1"]).expect("columns of a matrix");
+    assert_eq!(read.names, ["data:3", "data:1"]);
+    assert_eq!(read.values, vec![data[8..12].to_vec(), data[0..4].to_vec()]);
+    // The only variable: a number picks its column.
+    let read = read_columns(&path, &[Column::Index(2)], &ReadOptions::default()).expect("index");
+    assert_eq!(read.values, vec![data[4..8].to_vec()]);
+
+    let (error, message) = read_error(&path, &["data"], &ReadOptions::default());
+    assert!(
+        matches!(error, DataError::UnusableVariable { .. }),
+        "{error:?}"
+    );
+    assert_contains(
+        &message,
+        &["data.mat", "\"data\"", "4×3", "data:1 to data:3"],
+    );
+    let (error, message) = read_error(&path, &["data:4"], &ReadOptions::default());
+    assert!(
+        matches!(error, DataError::UnusableVariable { .. }),
+        "{error:?}"
+    );
+    assert_contains(&message, &["data:4", "3 columns"]);
+}
+
+#[test]
+fn level5_integers_convert_and_ranges_select_samples() {
+    let dir = dir();
+    let path = file(
+        dir.path(),
+        "ints.mat",
+        mat5::file(
+            &[
+                Variable {
+                    name: "counts",
+                    dims: &[1, 5],
+                    values: Values::Int16(&[-2, -1, 0, 1, 30_000]),
+                },
+                Variable {
+                    name: "small",
+                    dims: &[5, 1],
+                    values: Values::DoubleAsUInt8(&[0, 1, 2, 200, 255]),
+                },
+                Variable {
+                    name: "medium",
+                    dims: &[5, 1],
+                    values: Values::DoubleAsInt16(&[-300, -1, 0, 1, 300]),
+                },
+            ],
+            true,
+            false,
+        ),
+    );
+    let read = read(&path, &["counts", "small", "medium"]).expect("reading");
+    assert_eq!(
+        read.values,
+        vec![
+            vec![-2.0, -1.0, 0.0, 1.0, 30_000.0],
+            vec![0.0, 1.0, 2.0, 200.0, 255.0],
+            vec![-300.0, -1.0, 0.0, 1.0, 300.0],
+        ]
+    );
+    let options = ReadOptions {
+        rows: Some("2..4".parse().expect("a range")),
+        ..ReadOptions::default()
+    };
+    let part = read_with(&path, &["counts"], &options).expect("reading a range");
+    assert_eq!(part.values, vec![vec![-1.0, 0.0, 1.0]]);
+    assert_eq!(part.first_row, 2);
+    let options = ReadOptions {
+        rows: Some("4..6".parse().expect("a range")),
+        ..ReadOptions::default()
+    };
+    let (error, _) = read_error(&path, &["counts"], &options);
+    assert!(matches!(
+        error,
+        DataError::RowsOutOfRange { available: 5, .. }
+    ));
+
+    // The only variable is a vector: column 1 is the vector, column 2 does not exist.
+    let path = file(
+        dir.path(),
+        "one.mat",
+        mat5::file(&[var("u", &[1, 3], &[4.0, 5.0, 6.0])], false, true),
+    );
+    let all = read_columns(&path, &[Column::Index(1)], &ReadOptions::default()).expect("index");
+    assert_eq!(all.values, vec![vec![4.0, 5.0, 6.0]]);
+    let (error, _) = read_error(&path, &["2"], &ReadOptions::default());
+    assert!(
+        matches!(error, DataError::UnusableVariable { .. }),
+        "{error:?}"
+    );
+}
+
+#[test]
+fn level5_int32_variables_read_or_get_a_hint() {
+    // matfile 0.5 expects int32 arrays to hold miUINT32 data and refuses MATLAB's miINT32:
+    // either the values come through, or the message says what to do.
+    let dir = dir();
+    let path = file(
+        dir.path(),
+        "int32.mat",
+        mat5::file(
+            &[Variable {
+                name: "counts",
+                dims: &[3, 1],
+                values: Values::Int32(&[-7, 0, 2_000_000_000]),
+            }],
+            false,
+            false,
+        ),
+    );
+    match read(&path, &["counts"]) {
+        Ok(read) => assert_eq!(read.values, vec![vec![-7.0, 0.0, 2e9]]),
+        Err(error) => {
+            assert!(
+                matches!(error, DataError::MatUnreadable { .. }),
+                "{error:?}"
+            );
+            assert_contains(&error.to_string(), &["int32.mat", "double("]);
+        }
+    }
+}
+
+#[test]
+fn level5_problems_are_explained() {
+    let dir = dir();
+    let path = file(
+        dir.path(),
+        "several.mat",
+        mat5::file(
+            &[
+                var("u", &[3, 1], &[1.0, 2.0, 3.0]),
+                var("y", &[2, 1], &[1.0, 2.0]),
+                var("bad", &[3, 1], &[1.0, f64::NAN, 3.0]),
+                var("cube", &[2, 2, 2], &[0.0; 8]),
+                Variable {
+                    name: "z",
+                    dims: &[3, 1],
+                    values: Values::Complex(&[1.0, 2.0, 3.0], &[0.0, 1.0, 0.0]),
+                },
+            ],
+            false,
+            false,
+        ),
+    );
+    let (error, message) = read_error(&path, &["voltage"], &ReadOptions::default());
+    assert!(
+        matches!(error, DataError::NoSuchVariable { .. }),
+        "{error:?}"
+    );
+    assert_contains(
+        &message,
+        &[
+            "several.mat",
+            "\"voltage\"",
+            "u (3×1 double)",
+            "y (2×1 double)",
+        ],
+    );
+
+    let (error, message) = read_error(&path, &["1"], &ReadOptions::default());
+    assert!(
+        matches!(error, DataError::NoSuchVariable { .. }),
+        "{error:?}"
+    );
+    assert_contains(&message, &["column 1", "variable name"]);
+
+    let (error, message) = read_error(&path, &["u", "y"], &ReadOptions::default());
+    assert!(
+        matches!(error, DataError::LengthMismatch { .. }),
+        "{error:?}"
+    );
+    assert_contains(&message, &["several.mat", "u: 3", "y: 2"]);
+
+    let (error, message) = read_error(&path, &["bad"], &ReadOptions::default());
+    assert!(
+        matches!(
+            error,
+            DataError::NotFinite {
+                row: 2,
+                line: None,
+                ..
+            }
+        ),
+        "{error:?}"
+    );
+    assert_contains(&message, &["several.mat", "\"bad\"", "sample 2", "NaN"]);
+
+    let (error, message) = read_error(&path, &["cube"], &ReadOptions::default());
+    assert!(
+        matches!(error, DataError::UnusableVariable { .. }),
+        "{error:?}"
+    );
+    assert_contains(&message, &["2×2×2", "more than two dimensions"]);
+
+    let (error, message) = read_error(&path, &["z"], &ReadOptions::default());
+    assert!(
+        matches!(error, DataError::UnusableVariable { .. }),
+        "{error:?}"
+    );
+    assert_contains(&message, &["\"z\"", "complex", "real("]);
+}
+
+#[test]
+fn v73_files_ask_to_resave_with_v7() {
+    let dir = dir();
+    let path = file(dir.path(), "big.mat", mat5::v73_stub());
+    let (error, message) = read_error(&path, &["u"], &ReadOptions::default());
+    assert!(matches!(error, DataError::MatV73 { .. }), "{error:?}");
+    assert_contains(&message, &["big.mat", "v7.3", "'-v7'"]);
+
+    // The HDF5 signature alone (a header written by another tool) is enough.
+    let mut bytes = vec![b' '; 512];
+    bytes.extend_from_slice(b"\x89HDF\r\n\x1a\n");
+    let path = file(dir.path(), "other.mat", bytes);
+    let (error, _) = read_error(&path, &["u"], &ReadOptions::default());
+    assert!(matches!(error, DataError::MatV73 { .. }), "{error:?}");
+}
+
+#[test]
+fn other_mat_files_get_a_clear_message() {
+    let dir = dir();
+    // A Level-4 file starts with a 20-byte binary header (type, rows, cols, imag, name length).
+    let mut v4 = Vec::new();
+    for n in [0u32, 3, 1, 0, 2] {
+        v4.extend_from_slice(&n.to_le_bytes());
+    }
+    v4.extend_from_slice(b"u\0");
+    for x in [1.0f64, 2.0, 3.0] {
+        v4.extend_from_slice(&x.to_le_bytes());
+    }
+    let path = file(dir.path(), "old.mat", v4);
+    let (error, message) = read_error(&path, &["u"], &ReadOptions::default());
+    assert!(
+        matches!(error, DataError::UnsupportedFormat { .. }),
+        "{error:?}"
+    );
+    assert_contains(&message, &["old.mat", "v4", "'-v7'"]);
+
+    // A Level-5 header followed by garbage.
+    let mut damaged = mat5::file(&[var("u", &[3, 1], &[1.0, 2.0, 3.0])], false, false);
+    damaged.truncate(128 + 40);
+    damaged.extend_from_slice(&[0xff; 24]);
+    let path = file(dir.path(), "damaged.mat", damaged);
+    let (error, message) = read_error(&path, &["u"], &ReadOptions::default());
+    assert!(
+        matches!(
+            error,
+            DataError::MatUnreadable { .. } | DataError::NoSuchVariable { .. }
+        ),
+        "{error:?}"
+    );
+    assert_contains(&message, &["damaged.mat"]);
+}
+
+// ---------------------------------------------------------------------------------------------
+// The real micromanipulator records (read from ../shared when present)
+// ---------------------------------------------------------------------------------------------
+
+fn dbo(name: &str) -> Option<PathBuf> {
+    let path = Path::new(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../../../shared/data/dbo-micromanipulator"
+    ))
+    .join(name);
+    if path.is_file() {
+        Some(path)
+    } else {
+        eprintln!(
+            "skipping: the real record {} is not present",
+            path.display()
+        );
+        None
+    }
+}
+
+#[test]
+fn the_real_identification_record_reads_with_its_shape() {
+    let Some(path) = dbo("Model_Vi_Do.dat") else {
+        return;
+    };
+    let read = read(&path, &["1", "5"]).expect("reading Model_Vi_Do.dat");
+    assert_eq!(read.names, ["column 1", "column 5"]);
+    assert_eq!(read.len(), 8027);
+    let (voltage, output) = (&read.values[0], &read.values[1]);
+    assert!(
+        (voltage[0] - 1.8).abs() < 1e-9,
+        "first voltage {}",
+        voltage[0]
+    );
+    let (lo, hi) = voltage
+        .iter()
+        .fold((f64::MAX, f64::MIN), |(lo, hi), &v| (lo.min(v), hi.max(v)));
+    assert!(
+        lo > -0.01 && lo < 0.1 && hi > 3.5 && hi < 3.61,
+        "voltage {lo}..{hi}"
+    );
+    assert!(output.iter().all(|&y| (-130.0..-70.0).contains(&y)));
+    check_not_constant("voltage", voltage).expect("the voltage varies");
+    check_not_constant("output", output).expect("the output varies");
+
+    // Columns have no names in this file: asking for one lists the 7 numbers.
+    let (error, message) = read_error(&path, &["voltage"], &ReadOptions::default());
+    assert!(matches!(
+        error,
+        DataError::NoSuchColumn { header: false, .. }
+    ));
+    assert_contains(&message, &["no header", "1 to 7"]);
+}
+
+#[test]
+fn the_real_tracking_record_reads_with_its_shape_and_ranges() {
+    let Some(path) = dbo("Test_Vi_Do_Di.dat") else {
+        return;
+    };
+    let read = read(&path, &["1", "5", "9"]).expect("reading Test_Vi_Do_Di.dat");
+    assert_eq!(read.len(), 14155);
+    assert!(read.values[2].iter().all(|d| d.abs() <= 20.5));
+    let options = ReadOptions {
+        rows: Some("11152..11851".parse().expect("a range")),
+        ..ReadOptions::default()
+    };
+    let part = read_with(&path, &["1", "5", "9"], &options).expect("reading a range");
+    assert_eq!(part.len(), 700);
+    assert_eq!(part.first_row, 11152);
+    assert_eq!(bits(&part.values[1]), bits(&read.values[1][11151..11851]));
+    let (error, _) = read_error(&path, &["12"], &ReadOptions::default());
+    assert!(matches!(error, DataError::NoSuchColumn { .. }));
+}
+
+// ---------------------------------------------------------------------------------------------
+// Atomic writes
+// ---------------------------------------------------------------------------------------------
+
+#[test]
+fn atomic_write_replaces_the_whole_file_and_leaves_nothing_else() {
+    let dir = dir();
+    let path = dir.path().join("model.json");
+    write_atomic(&path, b"a long first version of the file").expect("first write");
+    write_atomic(&path, b"short").expect("second write");
+    assert_eq!(fs::read(&path).expect("reading"), b"short");
+    assert_eq!(entries(dir.path()), ["model.json"]);
+}
+
+#[test]
+fn atomic_write_onto_a_directory_fails_and_leaves_it_intact() {
+    let dir = dir();
+    let target = dir.path().join("results");
+    fs::create_dir(&target).expect("a directory");
+    fs::write(target.join("inside.txt"), "keep").expect("a file inside");
+    let error = write_atomic(&target, b"new").expect_err("a directory is not a file");
+    assert_eq!(error.kind(), std::io::ErrorKind::IsADirectory);
+    assert!(error.to_string().contains("results"), "{error}");
+    assert_eq!(
+        fs::read_to_string(target.join("inside.txt")).expect("kept"),
+        "keep"
+    );
+    assert_eq!(entries(dir.path()), ["results"]);
+    assert_eq!(entries(&target), ["inside.txt"]);
+
+    let error = write_csv(&target, &["u"], &[&[1.0]]).expect_err("through write_csv");
+    assert!(matches!(error, DataError::Write { .. }) && error.is_output());
+    assert_contains(&error.to_string(), &["results"]);
+    assert_eq!(entries(dir.path()), ["results"]);
+}
+
+#[test]
+fn atomic_write_into_a_missing_directory_names_the_path() {
+    let dir = dir();
+    let path = dir.path().join("missing").join("out.csv");
+    let error = write_atomic(&path, b"x").expect_err("no directory");
+    assert_eq!(error.kind(), std::io::ErrorKind::NotFound);
+    assert!(error.to_string().contains("out.csv"), "{error}");
+    assert_eq!(entries(dir.path()), Vec::<String>::new());
+}
+
+#[cfg(unix)]
+#[test]
+fn atomic_write_in_a_read_only_directory_keeps_the_old_file() {
+    use std::os::unix::fs::PermissionsExt;
+    let dir = dir();
+    let locked = dir.path().join("locked");
+    fs::create_dir(&locked).expect("a directory");
+    let path = locked.join("model.json");
+    fs::write(&path, "old").expect("the old file");
+    fs::set_permissions(&locked, fs::Permissions::from_mode(0o555)).expect("read-only");
+    // A user who may write anyway (root) cannot test this: probe first.
+    let probe = locked.join("probe");
+    let writable = fs::write(&probe, "").is_ok();
+    if writable {
+        fs::remove_file(&probe).expect("removing the probe");
+        fs::set_permissions(&locked, fs::Permissions::from_mode(0o755)).expect("restore");
+        eprintln!("skipping: this user can write into read-only directories (root?)");
+        return;
+    }
+    let result = write_atomic(&path, b"new");
+    fs::set_permissions(&locked, fs::Permissions::from_mode(0o755)).expect("restore");
+    let error = result.expect_err("a read-only directory");
+    assert!(error.to_string().contains("model.json"), "{error}");
+    assert_eq!(fs::read_to_string(&path).expect("the old file"), "old");
+    assert_eq!(entries(&locked), ["model.json"]);
+}
+
+#[cfg(unix)]
+#[test]
+fn atomic_write_keeps_permissions_and_symbolic_links() {
+    use std::os::unix::fs::PermissionsExt;
+    let dir = dir();
+    let path = dir.path().join("data.csv");
+    fs::write(&path, "old").expect("the old file");
+    fs::set_permissions(&path, fs::Permissions::from_mode(0o640)).expect("permissions");
+    write_atomic(&path, b"new").expect("writing");
+    let mode = fs::metadata(&path).expect("metadata").permissions().mode() & 0o777;
+    assert_eq!(mode, 0o640);
+
+    let link = dir.path().join("latest.csv");
+    std::os::unix::fs::symlink("data.csv", &link).expect("a link");
+    write_atomic(&link, b"through the link").expect("writing through a link");
+    assert!(
+        fs::symlink_metadata(&link)
+            .expect("link")
+            .file_type()
+            .is_symlink()
+    );
+    assert_eq!(fs::read(&path).expect("reading"), b"through the link");
+    assert_eq!(entries(dir.path()), ["data.csv", "latest.csv"]);
+}
