@@ -1,1 +1,358 @@
-//! The model file format (to be filled in).
+//! The model file: a JSON document holding one identified MPIM (eq. (4)) in the paper's
+//! normalised units (eq. (11)), the physical scales and units that map it to the real world,
+//! and the direction it maps.
+//!
+//! ```json
+//! {
+//!   "format_version": 1,
+//!   "direction": "plant",
+//!   "description": "Table 1 of Gu & Zhu (2014)",
+//!   "input":  { "quantity": "voltage",      "unit": "V",  "offset": 0.0, "scale": 10.0 },
+//!   "output": { "quantity": "displacement", "unit": "um", "offset": 0.0, "scale": 75.0 },
+//!   "input_range": [0.0, 1.0],
+//!   "thresholds": [0.0, 0.1, ...],
+//!   "weights": [0.2313, 0.3059, ...],
+//!   "a1": -0.1569,
+//!   "a2": 0.4603,
+//!   "identification": { "solver": "ls", "...": "free-form metadata" }
+//! }
+//! ```
+//!
+//! - `direction`: `plant` maps the drive voltage `v` to the displacement `y` (used by IHC and
+//!   WIHC); `inverse` maps the desired displacement `y_d` to the voltage `v` (used by DIHC,
+//!   section 3.3).
+//! - `input` and `output`: `physical = offset + scale * normalised`, so the normalised input is
+//!   `(physical - offset) / scale`. `scale > 0`. For a plant the input is a voltage and the
+//!   output a displacement; for an inverse model the other way round.
+//! - `input_range`: the normalised input range the model was identified on and is invertible on
+//!   (`[0, 1]` when the thresholds are fractions of the input range, eq. (11)).
+//! - `thresholds`, `weights`, `a1`, `a2`: the normalised MPIM parameters of eq. (4).
+//! - `identification`: optional free-form JSON (solver, fit errors, data source...).
+
+use std::fmt;
+use std::path::Path;
+
+use hystcomp_core::{CoreError, Mpim};
+use serde::{Deserialize, Serialize};
+
+use crate::atomic::write_atomic;
+
+/// The only `format_version` this crate reads and writes.
+pub const FORMAT_VERSION: u32 = 1;
+
+/// What a model maps.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Direction {
+    /// Voltage in, displacement out: the plant's hysteresis (IHC, WIHC).
+    Plant,
+    /// Desired displacement in, voltage out: the inverse hysteresis (DIHC).
+    Inverse,
+}
+
+impl fmt::Display for Direction {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(match self {
+            Direction::Plant => "plant",
+            Direction::Inverse => "inverse",
+        })
+    }
+}
+
+/// The physical meaning of a normalised signal: `physical = offset + scale * normalised`.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Scale {
+    /// What the signal is, e.g. `voltage` or `displacement`.
+    pub quantity: String,
+    /// Its unit, e.g. `V` or `um`.
+    pub unit: String,
+    /// Physical value at normalised 0, in `unit`.
+    pub offset: f64,
+    /// Physical span of one normalised unit, in `unit` (> 0).
+    pub scale: f64,
+}
+
+impl Scale {
+    /// `(physical - offset) / scale`.
+    pub fn normalise(&self, physical: f64) -> f64 {
+        (physical - self.offset) / self.scale
+    }
+
+    /// `offset + scale * normalised`.
+    pub fn to_physical(&self, normalised: f64) -> f64 {
+        self.offset + self.scale * normalised
+    }
+}
+
+/// One model file. Build it with [`ModelFile::new`] (which validates) or read it with
+/// [`ModelFile::load`]; the fields are public for reading and serialisation.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ModelFile {
+    /// Always [`FORMAT_VERSION`].
+    pub format_version: u32,
+    /// What the model maps.
+    pub direction: Direction,
+    /// A line for people.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub description: Option<String>,
+    /// Physical meaning of the model input.
+    pub input: Scale,
+    /// Physical meaning of the model output.
+    pub output: Scale,
+    /// Normalised input range the model is valid (and invertible) on.
+    pub input_range: [f64; 2],
+    /// Thresholds `r_i`, normalised, increasing.
+    pub thresholds: Vec<f64>,
+    /// Weights `b_i`, normalised.
+    pub weights: Vec<f64>,
+    /// Cubic coefficient `a1`.
+    pub a1: f64,
+    /// Linear coefficient `a2`.
+    pub a2: f64,
+    /// Free-form metadata: how the model was obtained.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub identification: Option<serde_json::Value>,
+}
+
+/// Why a model file could not be read, written or used.
+#[derive(Debug)]
+pub enum ModelFileError {
+    /// The file could not be read or written.
+    Io {
+        /// The file.
+        path: String,
+        /// The operating system's reason.
+        source: std::io::Error,
+    },
+    /// The file is not valid JSON, or not of this format.
+    Parse {
+        /// The file.
+        path: String,
+        /// What serde_json found (with line and column).
+        message: String,
+    },
+    /// A `format_version` this build does not read.
+    UnknownVersion {
+        /// The file.
+        path: String,
+        /// The version found.
+        found: u64,
+    },
+    /// A scale, a unit or the input range is unusable.
+    Invalid {
+        /// What is wrong and how to mend it.
+        message: String,
+    },
+    /// The MPIM parameters are refused by the core.
+    Model(CoreError),
+}
+
+impl fmt::Display for ModelFileError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            ModelFileError::Io { path, source } => write!(f, "{path}: {source}"),
+            ModelFileError::Parse { path, message } => {
+                write!(f, "{path} is not a valid hystcomp model file: {message}")
+            }
+            ModelFileError::UnknownVersion { path, found } => write!(
+                f,
+                "{path} has format_version {found}, but this hystcomp reads format_version \
+                 {FORMAT_VERSION}; update hystcomp or re-identify the model"
+            ),
+            ModelFileError::Invalid { message } => f.write_str(message),
+            ModelFileError::Model(e) => write!(f, "the model parameters are refused: {e}"),
+        }
+    }
+}
+
+impl std::error::Error for ModelFileError {}
+
+impl From<CoreError> for ModelFileError {
+    fn from(e: CoreError) -> Self {
+        ModelFileError::Model(e)
+    }
+}
+
+impl ModelFile {
+    /// A validated model file (see [`ModelFile::validate`]).
+    #[allow(clippy::too_many_arguments)]
+    pub fn new(
+        direction: Direction,
+        input: Scale,
+        output: Scale,
+        input_range: [f64; 2],
+        thresholds: Vec<f64>,
+        weights: Vec<f64>,
+        a1: f64,
+        a2: f64,
+    ) -> Result<Self, ModelFileError> {
+        let file = ModelFile {
+            format_version: FORMAT_VERSION,
+            direction,
+            description: None,
+            input,
+            output,
+            input_range,
+            thresholds,
+            weights,
+            a1,
+            a2,
+            identification: None,
+        };
+        file.validate()?;
+        Ok(file)
+    }
+
+    /// A model file for `model` (its parameters; not its memory).
+    pub fn from_model(
+        direction: Direction,
+        input: Scale,
+        output: Scale,
+        input_range: [f64; 2],
+        model: &Mpim<f64, Vec<f64>>,
+    ) -> Result<Self, ModelFileError> {
+        ModelFile::new(
+            direction,
+            input,
+            output,
+            input_range,
+            model.thresholds().to_vec(),
+            model.weights().to_vec(),
+            model.a1(),
+            model.a2(),
+        )
+    }
+
+    /// Checks the version, the scales (finite, `scale > 0`, units named), the input range
+    /// (finite, `lo < hi`) and the MPIM parameters (see [`Mpim::new`]). Invertibility is
+    /// checked where the model is used (a compensator), with the limits it is used with.
+    pub fn validate(&self) -> Result<(), ModelFileError> {
+        if self.format_version != FORMAT_VERSION {
+            return Err(ModelFileError::UnknownVersion {
+                path: "the model".into(),
+                found: self.format_version.into(),
+            });
+        }
+        for (name, s) in [("input", &self.input), ("output", &self.output)] {
+            if !(s.offset.is_finite() && s.scale.is_finite() && s.scale > 0.0) {
+                return Err(ModelFileError::Invalid {
+                    message: format!(
+                        "{name}.offset and {name}.scale must be finite with {name}.scale > 0 \
+                         (got offset {}, scale {})",
+                        s.offset, s.scale
+                    ),
+                });
+            }
+            if s.unit.trim().is_empty() {
+                return Err(ModelFileError::Invalid {
+                    message: format!("{name}.unit is empty; name the unit, e.g. \"V\" or \"um\""),
+                });
+            }
+        }
+        let [lo, hi] = self.input_range;
+        if !(lo.is_finite() && hi.is_finite() && lo < hi) {
+            return Err(ModelFileError::Invalid {
+                message: format!(
+                    "input_range [{lo}, {hi}] must be finite and increasing (normalised units)"
+                ),
+            });
+        }
+        self.model()?;
+        Ok(())
+    }
+
+    /// The MPIM of this file, with zero memory.
+    pub fn model(&self) -> Result<Mpim<f64, Vec<f64>>, ModelFileError> {
+        Ok(Mpim::new(
+            &self.thresholds,
+            &self.weights,
+            self.a1,
+            self.a2,
+        )?)
+    }
+
+    /// Reads and validates a model file.
+    pub fn load(path: &Path) -> Result<Self, ModelFileError> {
+        let shown = path.display().to_string();
+        let text = std::fs::read_to_string(path).map_err(|source| ModelFileError::Io {
+            path: shown.clone(),
+            source,
+        })?;
+        Self::from_json(&text).map_err(|e| match e {
+            ModelFileError::Parse { message, .. } => ModelFileError::Parse {
+                path: shown,
+                message,
+            },
+            ModelFileError::UnknownVersion { found, .. } => {
+                ModelFileError::UnknownVersion { path: shown, found }
+            }
+            ModelFileError::Invalid { message } => ModelFileError::Invalid {
+                message: format!("{shown}: {message}"),
+            },
+            other => other,
+        })
+    }
+
+    /// Parses and validates a model file's text.
+    pub fn from_json(text: &str) -> Result<Self, ModelFileError> {
+        // Look at the version first, so that a future format gets the right message rather than
+        // a complaint about fields this build does not know.
+        let value: serde_json::Value =
+            serde_json::from_str(text).map_err(|e| ModelFileError::Parse {
+                path: String::new(),
+                message: e.to_string(),
+            })?;
+        match value.get("format_version").and_then(|v| v.as_u64()) {
+            Some(v) if v == u64::from(FORMAT_VERSION) => {}
+            Some(found) => {
+                return Err(ModelFileError::UnknownVersion {
+                    path: String::new(),
+                    found,
+                });
+            }
+            None => {
+                return Err(ModelFileError::Parse {
+                    path: String::new(),
+                    message: "no integer \"format_version\" field".into(),
+                });
+            }
+        }
+        // serde_path_to_error names the offending field (`a2: invalid type: ...`).
+        let file: ModelFile =
+            serde_path_to_error::deserialize(value).map_err(|e| ModelFileError::Parse {
+                path: String::new(),
+                message: e.to_string(),
+            })?;
+        file.validate()?;
+        Ok(file)
+    }
+
+    /// The file's text: pretty-printed JSON with a final newline.
+    pub fn to_json(&self) -> String {
+        let mut text =
+            serde_json::to_string_pretty(self).expect("a model file always serialises to JSON");
+        text.push('\n');
+        text
+    }
+
+    /// Writes the file atomically (temporary file, then rename).
+    pub fn save(&self, path: &Path) -> Result<(), ModelFileError> {
+        self.validate()?;
+        write_atomic(path, self.to_json().as_bytes()).map_err(|source| ModelFileError::Io {
+            path: path.display().to_string(),
+            source,
+        })
+    }
+
+    /// The normalised value of a physical model input.
+    pub fn normalise_input(&self, physical: f64) -> f64 {
+        self.input.normalise(physical)
+    }
+
+    /// The physical value of a normalised model output.
+    pub fn output_to_physical(&self, normalised: f64) -> f64 {
+        self.output.to_physical(normalised)
+    }
+}

@@ -1,0 +1,130 @@
+//! The model file format: round trips, the shipped examples, and every refusal.
+
+use std::path::PathBuf;
+
+use hystcomp_io::model_file::{Direction, ModelFile, ModelFileError, Scale};
+
+fn example(name: &str) -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+        .join("../../models")
+        .join(name)
+}
+
+fn volts() -> Scale {
+    Scale {
+        quantity: "command voltage".into(),
+        unit: "V".into(),
+        offset: 0.0,
+        scale: 10.0,
+    }
+}
+
+fn microns() -> Scale {
+    Scale {
+        quantity: "displacement".into(),
+        unit: "um".into(),
+        offset: -3.5,
+        scale: 75.0,
+    }
+}
+
+#[test]
+fn shipped_table_files_load_and_match_the_paper() {
+    let t1 = ModelFile::load(&example("table1-plant.json")).unwrap();
+    assert_eq!(t1.direction, Direction::Plant);
+    assert_eq!(t1.weights[1], 0.3059);
+    assert_eq!((t1.a1, t1.a2), (-0.1569, 0.4603));
+    t1.model().unwrap().check_invertible(0.0, 1.0).unwrap();
+    let t2 = ModelFile::load(&example("table2-inverse.json")).unwrap();
+    assert_eq!(t2.direction, Direction::Inverse);
+    assert_eq!(t2.weights[9], -0.47999);
+    assert_eq!(t2.input.unit, "um");
+    t2.model().unwrap().check_invertible(0.0, 1.0).unwrap();
+}
+
+#[test]
+fn a_saved_file_loads_back_identically_and_atomically() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("m.json");
+    let mut file = ModelFile::new(
+        Direction::Inverse,
+        microns(),
+        volts(),
+        [0.0, 1.0],
+        vec![0.0, 0.25, 0.5],
+        vec![0.1, -0.2, 1.0 / 3.0],
+        0.05,
+        0.9,
+    )
+    .unwrap();
+    file.identification = Some(serde_json::json!({"solver": "ls", "rms_percent": 0.42}));
+    file.save(&path).unwrap();
+    let back = ModelFile::load(&path).unwrap();
+    assert_eq!(back, file);
+    // Only the model file is left in the directory: no temporary file.
+    assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 1);
+    // Scales map both ways.
+    let x = back.input.to_physical(0.4);
+    assert!((back.normalise_input(x) - 0.4).abs() < 1e-15);
+    assert!((back.output_to_physical(0.5) - 5.0).abs() < 1e-15);
+}
+
+fn refusal(edit: impl Fn(&mut serde_json::Value)) -> String {
+    let text = std::fs::read_to_string(example("table1-plant.json")).unwrap();
+    let mut value: serde_json::Value = serde_json::from_str(&text).unwrap();
+    edit(&mut value);
+    ModelFile::from_json(&value.to_string())
+        .unwrap_err()
+        .to_string()
+}
+
+#[test]
+fn each_bad_file_is_refused_with_a_message_naming_the_problem() {
+    assert!(refusal(|v| v["format_version"] = 2.into()).contains("format_version 2"));
+    assert!(
+        refusal(|v| {
+            v.as_object_mut().unwrap().remove("format_version");
+        })
+        .contains("format_version")
+    );
+    assert!(
+        refusal(|v| v["direction"] = "sideways".into()).contains("expected `plant` or `inverse`")
+    );
+    assert!(refusal(|v| v["input"]["scale"] = 0.0.into()).contains("input.scale"));
+    assert!(refusal(|v| v["output"]["scale"] = (-1.0).into()).contains("output.scale"));
+    assert!(refusal(|v| v["output"]["unit"] = " ".into()).contains("output.unit"));
+    assert!(refusal(|v| v["input_range"] = serde_json::json!([1.0, 0.0])).contains("input_range"));
+    assert!(refusal(|v| v["weights"] = serde_json::json!([0.1])).contains("weights has 1"));
+    assert!(refusal(|v| v["thresholds"][3] = (-0.2).into()).contains("negative"));
+    assert!(refusal(|v| v["a2"] = "x".into()).contains("a2"));
+    assert!(refusal(|v| v["colour"] = "blue".into()).contains("colour"));
+    assert!(
+        refusal(|v| {
+            v.as_object_mut().unwrap().remove("a1");
+        })
+        .contains("a1")
+    );
+}
+
+#[test]
+fn unreadable_and_malformed_files_name_the_path() {
+    let missing = PathBuf::from("/nonexistent/dir/model.json");
+    let err = ModelFile::load(&missing).unwrap_err();
+    assert!(matches!(err, ModelFileError::Io { .. }));
+    assert!(err.to_string().contains("/nonexistent/dir/model.json"));
+    let dir = tempfile::tempdir().unwrap();
+    let bad = dir.path().join("bad.json");
+    std::fs::write(&bad, "{ not json").unwrap();
+    let err = ModelFile::load(&bad).unwrap_err().to_string();
+    assert!(
+        err.contains("bad.json") && err.contains("not a valid"),
+        "{err}"
+    );
+    let future = dir.path().join("future.json");
+    std::fs::write(&future, r#"{"format_version": 7, "whatever": true}"#).unwrap();
+    let err = ModelFile::load(&future).unwrap_err().to_string();
+    assert!(
+        err.contains("future.json") && err.contains("format_version 7"),
+        "{err}"
+    );
+}
