@@ -3,6 +3,8 @@
 
 mod commands;
 mod error;
+#[allow(dead_code)]
+mod progress;
 
 use std::process::ExitCode;
 

@@ -1,0 +1,1 @@
+//! Progress bars for long steps (to be filled in).
