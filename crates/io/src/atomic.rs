@@ -24,6 +24,16 @@ const NAME_PREFIX_LIMIT: usize = 64;
 ///
 /// Errors name the path: `could not write out/model.json: ...`.
 pub fn write_atomic(path: &Path, contents: &[u8]) -> io::Result<()> {
+    write_atomic_with(path, |out| out.write_all(contents))
+}
+
+/// Like [`write_atomic`], for contents produced by a writer (an encoder, a long CSV): `write`
+/// writes them to the temporary file (buffered); when it returns an error, the file at `path`
+/// is left as it was, the temporary file is removed and the error returned with the path.
+pub fn write_atomic_with<F>(path: &Path, write: F) -> io::Result<()>
+where
+    F: FnOnce(&mut dyn Write) -> io::Result<()>,
+{
     let context = |error: io::Error| {
         io::Error::new(
             error.kind(),
@@ -31,7 +41,7 @@ pub fn write_atomic(path: &Path, contents: &[u8]) -> io::Result<()> {
         )
     };
     let target = resolve_link(path).map_err(context)?;
-    write_replacing(&target, contents).map_err(context)
+    write_replacing(&target, write).map_err(context)
 }
 
 /// The file a symbolic link points to (following chains of links), or `path` itself.
@@ -53,7 +63,10 @@ fn resolve_link(path: &Path) -> io::Result<PathBuf> {
     Err(io::Error::other("too many levels of symbolic links"))
 }
 
-fn write_replacing(target: &Path, contents: &[u8]) -> io::Result<()> {
+fn write_replacing<F>(target: &Path, write: F) -> io::Result<()>
+where
+    F: FnOnce(&mut dyn Write) -> io::Result<()>,
+{
     let file_name = target.file_name().ok_or_else(|| {
         io::Error::new(
             io::ErrorKind::InvalidInput,
@@ -95,7 +108,11 @@ fn write_replacing(target: &Path, contents: &[u8]) -> io::Result<()> {
     if let Some(permissions) = existing {
         temporary.as_file().set_permissions(permissions)?;
     }
-    temporary.write_all(contents)?;
+    {
+        let mut buffered = io::BufWriter::new(temporary.as_file_mut());
+        write(&mut buffered)?;
+        buffered.flush()?;
+    }
     temporary.as_file().sync_all()?;
     temporary.persist(target).map_err(|error| error.error)?;
     sync_directory(dir)

@@ -15,8 +15,7 @@
 //!   lines, whose first non-blank character is `#` or `%`, are skipped anywhere in the file;
 //!   comments after numbers on the same line are not supported. A UTF-8 byte-order mark is
 //!   ignored; bytes that are not UTF-8 (e.g. a Latin-1 `µ` in a header) become U+FFFD and do
-//!   not stop numbers from being read. Each line is one record: a quoted field may not span
-//!   lines.
+//!   not stop numbers from being read.
 //! - **Delimiter** ([`Delimiter`]). `Auto` looks at the first line that is neither blank nor a
 //!   comment: a tab there means tab-separated, else a comma means comma-separated, else a
 //!   semicolon means semicolon-separated, else fields are separated by runs of spaces or tabs.
@@ -769,12 +768,9 @@ impl fmt::Display for DataError {
             DataError::UnsupportedFormat { path, reason } => {
                 write!(f, "cannot read {}: {reason}", path.display())
             }
-            DataError::MatUnreadable { path, reason } => write!(
-                f,
-                "cannot read the MAT-file {}: {reason}; re-save it with save(..., '-v7') or \
-                 export the columns as CSV",
-                path.display()
-            ),
+            DataError::MatUnreadable { path, reason } => {
+                write!(f, "cannot read the MAT-file {}: {reason}", path.display())
+            }
             DataError::NoSuchVariable {
                 path,
                 requested,
@@ -900,6 +896,22 @@ fn shape_text(shape: &[usize]) -> String {
 ///
 /// Checks that depend on what a column means (time increasing, input not constant, enough
 /// samples for a model) are the caller's: see [`check_time_increasing`] and the other checks.
+///
+/// # Example
+///
+/// ```
+/// use hystcomp_io::data::{Column, ReadOptions, read_columns};
+/// # let dir = tempfile::tempdir()?;
+/// # let path = dir.path().join("record.dat");
+/// # std::fs::write(&path, "0.000\t1.80\t-123.1\n0.005\t1.85\t-120.2\n")?;
+/// // A tab-separated record without header, like the micromanipulator files.
+/// let columns: Vec<Column> = ["2", "3"].iter().map(|c| c.parse()).collect::<Result<_, _>>()?;
+/// let record = read_columns(&path, &columns, &ReadOptions::default())?;
+/// assert_eq!(record.names, ["column 2", "column 3"]);
+/// assert_eq!(record.values[0], [1.8, 1.85]);
+/// assert_eq!(record.len(), 2);
+/// # Ok::<(), Box<dyn std::error::Error>>(())
+/// ```
 pub fn read_columns(
     path: &Path,
     columns: &[Column],
@@ -1011,44 +1023,70 @@ fn parse_number(text: &str) -> Option<f64> {
     text.trim().parse::<f64>().ok()
 }
 
-/// Splits the lines of a text file into fields.
-enum Splitter {
-    Csv(csv::ReaderBuilder),
-    Whitespace,
+/// The records of a text file's content lines, each with its line number in the file.
+///
+/// Blank and comment lines are left out of `content` beforehand (with `line_numbers` mapping
+/// its lines back to the file's), so that one `csv` reader splits the whole content.
+enum Records<'a> {
+    Csv {
+        reader: csv::Reader<&'a [u8]>,
+        line_numbers: &'a [usize],
+    },
+    Whitespace {
+        lines: std::iter::Zip<std::str::Lines<'a>, std::slice::Iter<'a, usize>>,
+    },
 }
 
-impl Splitter {
-    fn new(delimiter: Delimiter) -> Splitter {
+impl<'a> Records<'a> {
+    fn new(content: &'a str, line_numbers: &'a [usize], delimiter: Delimiter) -> Records<'a> {
         match delimiter.byte() {
-            Some(byte) => {
-                let mut builder = csv::ReaderBuilder::new();
-                builder
+            Some(byte) => Records::Csv {
+                reader: csv::ReaderBuilder::new()
                     .delimiter(byte)
                     .has_headers(false)
                     .flexible(true)
                     .trim(csv::Trim::All)
-                    .buffer_capacity(1024);
-                Splitter::Csv(builder)
-            }
-            None => Splitter::Whitespace,
+                    .from_reader(content.as_bytes()),
+                line_numbers,
+            },
+            None => Records::Whitespace {
+                lines: content.lines().zip(line_numbers.iter()),
+            },
         }
     }
 
-    /// The fields of one line, into `record`.
-    fn split(&self, line: &str, record: &mut csv::StringRecord) -> Result<(), csv::Error> {
-        record.clear();
+    /// Reads the next record into `record`, returning the file's line number it starts on,
+    /// or `None` at the end.
+    fn next(&mut self, record: &mut csv::StringRecord) -> Result<Option<usize>, csv::Error> {
         match self {
-            Splitter::Csv(builder) => {
-                let mut reader = builder.from_reader(line.as_bytes());
-                reader.read_record(record)?;
+            Records::Csv {
+                reader,
+                line_numbers,
+            } => {
+                if !reader.read_record(record)? {
+                    return Ok(None);
+                }
+                // The content has no empty lines, so the csv reader's line count is exact.
+                let content_line = record.position().map_or(1, |p| p.line());
+                let index = usize::try_from(content_line).unwrap_or(usize::MAX);
+                Ok(Some(
+                    line_numbers
+                        .get(index.saturating_sub(1))
+                        .copied()
+                        .unwrap_or(index),
+                ))
             }
-            Splitter::Whitespace => {
+            Records::Whitespace { lines } => {
+                let Some((line, &number)) = lines.next() else {
+                    return Ok(None);
+                };
+                record.clear();
                 for field in line.split_whitespace() {
                     record.push_field(field);
                 }
+                Ok(Some(number))
             }
         }
-        Ok(())
     }
 }
 
@@ -1060,13 +1098,16 @@ fn read_text(
 ) -> Result<Columns, DataError> {
     let text = String::from_utf8_lossy(bytes);
     let text = text.strip_prefix('\u{feff}').unwrap_or(&text);
-    let mut lines = text
-        .lines()
-        .enumerate()
-        .map(|(i, line)| (i + 1, line))
-        .filter(|(_, line)| !is_skipped_line(line))
-        .peekable();
-    let Some(&(first_line, first_text)) = lines.peek() else {
+    let mut content = String::with_capacity(text.len());
+    let mut line_numbers = Vec::new();
+    for (i, line) in text.lines().enumerate() {
+        if !is_skipped_line(line) {
+            content.push_str(line);
+            content.push('\n');
+            line_numbers.push(i + 1);
+        }
+    }
+    let Some(first_text) = content.lines().next() else {
         return Err(DataError::Empty {
             path: path.to_owned(),
         });
@@ -1075,18 +1116,20 @@ fn read_text(
         Delimiter::Auto => Delimiter::detect(first_text),
         given => given,
     };
-    let splitter = Splitter::new(delimiter);
+    let mut records = Records::new(&content, &line_numbers, delimiter);
     let mut record = csv::StringRecord::new();
-    let split = |line: usize, text: &str, record: &mut csv::StringRecord| {
-        splitter
-            .split(text, record)
-            .map_err(|error| DataError::Read {
-                path: path.to_owned(),
-                source: io::Error::new(io::ErrorKind::InvalidData, format!("line {line}: {error}")),
-            })
+    let mut next = |record: &mut csv::StringRecord| {
+        records.next(record).map_err(|error| DataError::Read {
+            path: path.to_owned(),
+            source: io::Error::new(io::ErrorKind::InvalidData, error.to_string()),
+        })
     };
 
-    split(first_line, first_text, &mut record)?;
+    let Some(first_line) = next(&mut record)? else {
+        return Err(DataError::Empty {
+            path: path.to_owned(),
+        });
+    };
     let expected = record.len();
     let header = match options.header {
         Header::Present => true,
@@ -1101,9 +1144,6 @@ fn read_text(
             _ => format!("column {}", i + 1),
         })
         .collect();
-    if header {
-        lines.next();
-    }
     let selected = columns
         .iter()
         .map(|column| resolve_text_column(path, column, &names, header))
@@ -1117,25 +1157,14 @@ fn read_text(
         Some(rows) => (rows.first, rows.last.unwrap_or(usize::MAX)),
         None => (1, usize::MAX),
     };
-    let mut values: Vec<Vec<f64>> = vec![Vec::new(); selected.len()];
-    let mut row = 0usize;
-    for (line, line_text) in lines {
-        split(line, line_text, &mut record)?;
-        if record.len() != expected {
-            return Err(DataError::Ragged {
-                path: path.to_owned(),
-                line,
-                found: record.len(),
-                first_line,
-                expected,
-                delimiter,
-            });
-        }
-        row += 1;
-        if row < first_row || row > last_row {
-            continue;
-        }
-        for ((&index, label), column) in selected.iter().zip(&labels).zip(&mut values) {
+    let selected_rows = first_row..=last_row;
+    // Appends the selected fields of a record (row `row`, on line `line`) to `values`.
+    let take = |row: usize,
+                line: usize,
+                record: &csv::StringRecord,
+                values: &mut [Vec<f64>]|
+     -> Result<(), DataError> {
+        for ((&index, label), column) in selected.iter().zip(&labels).zip(values.iter_mut()) {
             let field = record.get(index).unwrap_or("");
             let value = parse_number(field).ok_or_else(|| DataError::NotANumber {
                 path: path.to_owned(),
@@ -1153,6 +1182,32 @@ fn read_text(
                 });
             }
             column.push(value);
+        }
+        Ok(())
+    };
+
+    let mut values: Vec<Vec<f64>> = vec![Vec::new(); selected.len()];
+    let mut row = 0usize;
+    if !header {
+        row = 1;
+        if selected_rows.contains(&row) {
+            take(row, first_line, &record, &mut values)?;
+        }
+    }
+    while let Some(line) = next(&mut record)? {
+        if record.len() != expected {
+            return Err(DataError::Ragged {
+                path: path.to_owned(),
+                line,
+                found: record.len(),
+                first_line,
+                expected,
+                delimiter,
+            });
+        }
+        row += 1;
+        if selected_rows.contains(&row) {
+            take(row, line, &record, &mut values)?;
         }
     }
     if row == 0 {
@@ -1285,21 +1340,26 @@ fn read_mat(
     let parsed = std::panic::catch_unwind(|| matfile::MatFile::parse(bytes)).map_err(|_| {
         DataError::MatUnreadable {
             path: path.to_owned(),
-            reason: "the file is damaged (the MAT-file reader failed on it)".to_owned(),
+            reason: "the file is damaged (the MAT-file reader failed on it); save it again with \
+                     save(..., '-v7'), or export the columns as CSV"
+                .to_owned(),
         }
     })?;
     let mat = parsed.map_err(|error| DataError::MatUnreadable {
         path: path.to_owned(),
         reason: match error {
             matfile::Error::IOError(error) => error.to_string(),
-            matfile::Error::ParseError(_) => "the file is damaged or holds a variable the \
-                 reader does not support (int32 and int64 arrays are among them: convert them \
-                 with double(x) before saving)"
+            matfile::Error::ParseError(_) => "the file is damaged, or holds a variable the \
+                 reader does not support (int32 arrays, for one: convert them with double(x) \
+                 and save again with save(..., '-v7'))"
                 .to_owned(),
-            matfile::Error::ConversionError => {
-                "a variable's stored number type does not match its class".to_owned()
-            }
-            matfile::Error::InternalError => "the MAT-file reader failed".to_owned(),
+            matfile::Error::ConversionError => "a variable's stored number type does not \
+                 match its class; save it again with save(..., '-v7'), or export the columns \
+                 as CSV"
+                .to_owned(),
+            matfile::Error::InternalError => "the MAT-file reader failed; save the file again \
+                 with save(..., '-v7'), or export the columns as CSV"
+                .to_owned(),
         },
     })?;
     let arrays = mat.arrays();
@@ -1411,7 +1471,8 @@ fn mat_column(
         return Err(DataError::MatUnreadable {
             path: path.to_owned(),
             reason: format!(
-                "variable \"{name}\" has {} values for dimensions {}",
+                "variable \"{name}\" has {} values for dimensions {}, so the file is \
+                 damaged; save it again with save(..., '-v7')",
                 all.len(),
                 shape_text(&shape)
             ),
@@ -1471,6 +1532,20 @@ fn mat_column(
 /// Writes columns of numbers as comma-separated text, atomically (see [`write_delimited`]).
 ///
 /// `header` holds one name per column, or is empty for a file without header line.
+///
+/// # Example
+///
+/// ```
+/// use hystcomp_io::data::{Column, ReadOptions, read_columns, write_csv};
+/// # let dir = tempfile::tempdir()?;
+/// let path = dir.path().join("response.csv");
+/// let time = [0.0, 0.005, 0.01];
+/// let position = [0.1, -2.5e-7, 1e300];
+/// write_csv(&path, &["time_s", "position_um"], &[&time, &position])?;
+/// let read = read_columns(&path, &[Column::Name("position_um".into())], &ReadOptions::default())?;
+/// assert_eq!(read.values[0], position); // exactly, bit for bit
+/// # Ok::<(), Box<dyn std::error::Error>>(())
+/// ```
 pub fn write_csv(path: &Path, header: &[&str], columns: &[&[f64]]) -> Result<(), DataError> {
     write_delimited(path, header, columns, Delimiter::Comma)
 }

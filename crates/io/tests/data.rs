@@ -4,7 +4,7 @@
 use std::fs;
 use std::path::{Path, PathBuf};
 
-use hystcomp_io::atomic::write_atomic;
+use hystcomp_io::atomic::{write_atomic, write_atomic_with};
 use hystcomp_io::data::{
     Column, Columns, DataError, Delimiter, Header, ReadOptions, RowRange, check_finite,
     check_min_samples, check_not_constant, check_same_length, check_time_increasing, read_columns,
@@ -398,6 +398,17 @@ fn a_field_that_is_not_a_number_is_located() {
     let path = file(dir.path(), "comma.csv", "t;u\n0;1,5\n");
     let (_, message) = read_error(&path, &["u"], &ReadOptions::default());
     assert_contains(&message, &["\"1,5\"", "decimal commas"]);
+
+    let path = file(
+        dir.path(),
+        "crlf.csv",
+        "# logger\r\nt,u\r\n\r\n0,1\r\n1,x\r\n",
+    );
+    let (error, _) = read_error(&path, &["u"], &ReadOptions::default());
+    assert!(
+        matches!(error, DataError::NotANumber { line: 5, .. }),
+        "{error:?}"
+    );
 
     let path = file(dir.path(), "gap.csv", "1,2\n3,\n");
     let (_, message) = read_error(&path, &["2"], &ReadOptions::default());
@@ -1347,6 +1358,45 @@ fn level5_problems_are_explained() {
     assert_contains(&message, &["\"z\"", "complex", "real("]);
 }
 
+fn fixture(name: &str) -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("tests/fixtures")
+        .join(name)
+}
+
+#[test]
+fn level5_files_written_by_scipy_read_exactly() {
+    // Written by scipy.io.savemat (see tests/fixtures/README.md): k = 0..9, t = k/200,
+    // u = k/4 - 1 (columns), y = k/2 - 100 (a row), data = [t u y], counts = int16(-5..4),
+    // plus a char and a struct variable, which are skipped.
+    let k: Vec<f64> = (0..10).map(f64::from).collect();
+    let t: Vec<f64> = k.iter().map(|k| k / 200.0).collect();
+    let u: Vec<f64> = k.iter().map(|k| k * 0.25 - 1.0).collect();
+    let y: Vec<f64> = k.iter().map(|k| -100.0 + k * 0.5).collect();
+    for name in ["scipy_record.mat", "scipy_record_compressed.mat"] {
+        let path = fixture(name);
+        let read = read(
+            &path,
+            &["t", "u", "y", "data:1", "data:2", "data:3", "counts"],
+        )
+        .unwrap_or_else(|e| panic!("{name}: {e}"));
+        assert_eq!(read.len(), 10);
+        for (got, expected) in read.values.iter().zip([&t, &u, &y, &t, &u, &y]) {
+            assert_eq!(bits(got), bits(expected), "{name}");
+        }
+        assert_eq!(read.values[6], (-5..5).map(f64::from).collect::<Vec<_>>());
+        let (error, message) = read_error(&path, &["note"], &ReadOptions::default());
+        assert!(
+            matches!(error, DataError::NoSuchVariable { .. }),
+            "{error:?}"
+        );
+        assert_contains(
+            &message,
+            &["\"note\"", "t (10×1 double)", "data (10×3 double)"],
+        );
+    }
+}
+
 #[test]
 fn v73_files_ask_to_resave_with_v7() {
     let dir = dir();
@@ -1485,6 +1535,28 @@ fn atomic_write_replaces_the_whole_file_and_leaves_nothing_else() {
     write_atomic(&path, b"a long first version of the file").expect("first write");
     write_atomic(&path, b"short").expect("second write");
     assert_eq!(fs::read(&path).expect("reading"), b"short");
+    assert_eq!(entries(dir.path()), ["model.json"]);
+}
+
+#[test]
+fn atomic_write_failing_midway_keeps_the_old_file_and_no_temporary() {
+    let dir = dir();
+    let path = dir.path().join("model.json");
+    fs::write(&path, "the old model").expect("the old file");
+    let error = write_atomic_with(&path, |out| {
+        out.write_all(&[b'x'; 100_000])?;
+        Err(std::io::Error::other("the encoder gave up"))
+    })
+    .expect_err("the writer fails");
+    assert_contains(&error.to_string(), &["model.json", "the encoder gave up"]);
+    assert_eq!(fs::read_to_string(&path).expect("kept"), "the old model");
+    assert_eq!(entries(dir.path()), ["model.json"]);
+
+    write_atomic_with(&path, |out| out.write_all(b"the new model")).expect("writing");
+    assert_eq!(
+        fs::read_to_string(&path).expect("replaced"),
+        "the new model"
+    );
     assert_eq!(entries(dir.path()), ["model.json"]);
 }
 
