@@ -661,6 +661,10 @@ fn encode_png(rgb: &[u8], (w, h): (u32, u32)) -> Result<Vec<u8>, FigureError> {
     let mut encoder = png::Encoder::new(&mut out, w, h);
     encoder.set_color(png::ColorType::Rgb);
     encoder.set_depth(png::BitDepth::Eight);
+    // Figures are mostly flat colour: adaptive filtering makes them about five times smaller
+    // (the best compression level gains nothing more and is several times slower).
+    encoder.set_adaptive_filter(png::AdaptiveFilterType::Adaptive);
+    encoder.set_compression(png::Compression::Default);
     let mut writer = encoder
         .write_header()
         .map_err(|e| FigureError::Encoding(e.to_string()))?;
@@ -728,8 +732,11 @@ fn draw_panel<DB: DrawingBackend>(
         .label_style((FONT_FAMILY, TICK_FONT_PX))
         .x_labels(9)
         .y_labels(8)
+        .x_label_formatter(&tick_label)
+        .y_label_formatter(&tick_label)
         .bold_line_style(RGBColor(222, 222, 222))
-        .light_line_style(RGBColor(244, 244, 244))
+        .light_line_style(RGBColor(242, 242, 242))
+        .max_light_lines(4)
         .axis_style(RGBColor(90, 90, 90))
         .draw()
         .map_err(drawing_error)?;
@@ -807,6 +814,17 @@ fn draw_panel<DB: DrawingBackend>(
     Ok(())
 }
 
+/// A tick value without needless digits: `10`, `2.5`, `0.2` (not `10.0`, `0.20000000000000004`)
+/// and never `-0`.
+fn tick_label(v: &f64) -> String {
+    let s = format!("{v:.6}");
+    let s = s.trim_end_matches('0').trim_end_matches('.');
+    match s {
+        "-0" | "" => "0".to_string(),
+        s => s.to_string(),
+    }
+}
+
 #[derive(Clone, Copy)]
 enum Corner {
     UpperLeft,
@@ -867,6 +885,17 @@ mod tests {
         assert!(lo < 5.0 && hi > 5.0);
         assert_eq!(padded((0.0, f64::MAX), 0.0, 0.0), Some((0.0, f64::MAX)));
         assert_eq!(padded((-f64::MAX, f64::MAX), 0.0, 0.0), None);
+    }
+
+    #[test]
+    fn tick_labels_have_no_needless_digits() {
+        assert_eq!(tick_label(&10.0), "10");
+        assert_eq!(tick_label(&2.5), "2.5");
+        assert_eq!(tick_label(&(0.1 + 0.2)), "0.3");
+        assert_eq!(tick_label(&-0.0), "0");
+        assert_eq!(tick_label(&-1e-17), "0");
+        assert_eq!(tick_label(&-0.4), "-0.4");
+        assert_eq!(tick_label(&1.0e6), "1000000");
     }
 
     #[test]

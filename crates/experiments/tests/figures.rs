@@ -108,7 +108,7 @@ fn assert_drawn(path: &Path, size: (u32, u32), colours: &[[u8; 3]]) {
     );
     let dark = pixels.iter().filter(|p| p.iter().all(|&c| c < 80)).count();
     assert!(
-        dark > 2_000,
+        dark > 1_000,
         "{}: only {dark} dark (text) pixels",
         path.display()
     );
@@ -394,13 +394,10 @@ fn bad_data_gives_errors_and_writes_nothing() {
         decimate_min_max(&good, &good, 1),
         Err(FigureError::TooFewPoints(1))
     ));
-    assert_eq!(
-        decimate_min_max(&empty, &empty, 10)
-            .unwrap_err()
-            .to_string()
-            .is_empty(),
-        false
-    );
+    assert!(matches!(
+        decimate_min_max(&empty, &empty, 10),
+        Err(FigureError::EmptySeries { .. })
+    ));
 }
 
 /// The plain definition: run `b` of `n` samples in `bins` runs is `b*n/bins .. (b+1)*n/bins`;
