@@ -4,10 +4,11 @@
 //! # Reading
 //!
 //! [`read_columns`] reads the selected [`Column`]s of one file into a [`Columns`] record.
-//! The format is chosen by the file's content (its magic bytes) and, failing that, its
-//! extension: a file whose 128-byte header marks a MATLAB Level-5 MAT-file is read as one,
-//! a MATLAB v7.3 (HDF5) file is refused with a message to re-save it with `-v7`, any other
-//! file ending in `.mat` is refused as unreadable, and everything else is read as text.
+//! The format is chosen by the file's content (its magic bytes), whatever its extension: a
+//! file whose 128-byte header marks a MATLAB Level-5 MAT-file is read as one, a MATLAB v7.3
+//! (HDF5) file is refused with a message to re-save it with `-v7`, other binary files (a
+//! MATLAB v4 `.mat` among them) are refused, and text is read as text (also a `.mat` file
+//! that MATLAB wrote with `save -ascii`).
 //!
 //! ## Delimited text
 //!
@@ -120,16 +121,6 @@ impl fmt::Display for Column {
         match self {
             Column::Index(k) => write!(f, "{k}"),
             Column::Name(name) => f.write_str(name),
-        }
-    }
-}
-
-impl Column {
-    /// How messages name the requested column: `column 3` or `"voltage"`.
-    fn describe(&self) -> String {
-        match self {
-            Column::Index(k) => format!("column {k}"),
-            Column::Name(name) => format!("\"{name}\""),
         }
     }
 }
@@ -717,7 +708,10 @@ impl fmt::Display for DataError {
                         f,
                         "{}: no {}; the file has {count} column{}: {}",
                         path.display(),
-                        requested.describe(),
+                        match requested {
+                            Column::Index(k) => format!("column {k}"),
+                            Column::Name(name) => format!("column named \"{name}\""),
+                        },
                         if count == 1 { "" } else { "s" },
                         short_list(available.iter().enumerate().map(|(i, name)| {
                             if *header {
@@ -993,16 +987,17 @@ fn detect_format(path: &Path, bytes: &[u8]) -> Format {
     let is_mat = path
         .extension()
         .is_some_and(|ext| ext.eq_ignore_ascii_case("mat"));
-    if is_mat {
+    // Text has no NUL bytes; binary formats (MATLAB v4 headers among them) almost always do.
+    let head = &bytes[..bytes.len().min(8192)];
+    let binary = head.contains(&0);
+    if is_mat && binary {
         return Format::Unsupported(
-            "it ends in .mat but has no MATLAB Level-5 header (it may be a MATLAB v4 file, or \
-             text saved with -ascii); re-save it in MATLAB with save(..., '-v7'), or rename a \
-             text file to .csv or .txt"
+            "it ends in .mat but has no MATLAB Level-5 header (it may be a MATLAB v4 file); \
+             re-save it in MATLAB with save(..., '-v7')"
                 .to_owned(),
         );
     }
-    let head = &bytes[..bytes.len().min(8192)];
-    if head.contains(&0) {
+    if binary {
         return Format::Unsupported(
             "it is a binary file; give delimited text (CSV, tab- or space-separated) or a \
              MATLAB Level-5 .mat file"

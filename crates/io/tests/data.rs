@@ -1433,6 +1433,15 @@ fn other_mat_files_get_a_clear_message() {
     );
     assert_contains(&message, &["old.mat", "v4", "'-v7'"]);
 
+    // Text saved by MATLAB with -ascii under a .mat name is read as text.
+    let path = file(
+        dir.path(),
+        "ascii.mat",
+        "   1.0000000e+00   2.5000000e+00\n   3.0000000e+00  -4.0000000e+00\n",
+    );
+    let read = read(&path, &["2"]).expect("an -ascii file");
+    assert_eq!(read.values, vec![vec![2.5, -4.0]]);
+
     // A Level-5 header followed by garbage.
     let mut damaged = mat5::file(&[var("u", &[3, 1], &[1.0, 2.0, 3.0])], false, false);
     damaged.truncate(128 + 40);
