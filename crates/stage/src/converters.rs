@@ -60,7 +60,7 @@ mod tests {
             assert!((k - k.round()).abs() < 1e-6);
         }
         assert_eq!(q.quantise(0.0), (0.0, false));
-        assert_eq!(q.quantise(12.0).1, true);
+        assert!(q.quantise(12.0).1);
         assert!(q.quantise(12.0).0 < 10.0);
         assert_eq!(q.quantise(-12.0), (-10.0, true));
     }

@@ -176,9 +176,8 @@ impl PreisachHysteresis {
             return;
         }
         let ascending = self.turns.len() % 2 == 0;
-        if ascending && u < previous {
-            self.push(previous);
-        } else if !ascending && u > previous {
+        // A reversal: the previous input becomes a turning point.
+        if (ascending && u < previous) || (!ascending && u > previous) {
             self.push(previous);
         }
         self.input = u;
