@@ -144,7 +144,55 @@ fn assert_svg(path: &Path, texts: &[&str]) {
     for text in texts {
         assert!(svg.contains(text), "{} lacks {text:?}", path.display());
     }
-    assert_eq!(svg.matches("<text").count(), svg.matches("</text>").count());
+    assert_well_formed(&svg, path);
+}
+
+/// A small XML well-formedness check: every element closes in order, attributes are quoted,
+/// and text holds no raw `<` or stray `&`.
+fn assert_well_formed(svg: &str, path: &Path) {
+    let mut open: Vec<&str> = Vec::new();
+    let mut rest = svg;
+    while let Some(start) = rest.find('<') {
+        let text = &rest[..start];
+        assert!(
+            text.split('&')
+                .skip(1)
+                .all(|t| ["lt;", "gt;", "amp;", "quot;", "apos;", "#"]
+                    .iter()
+                    .any(|e| t.starts_with(e))),
+            "{}: stray '&' in {text:?}",
+            path.display()
+        );
+        let end = start + rest[start..].find('>').expect("tag closes");
+        let tag = &rest[start + 1..end];
+        assert!(
+            !tag.contains('<'),
+            "{}: '<' inside a tag: {tag:?}",
+            path.display()
+        );
+        assert_eq!(
+            tag.matches('"').count() % 2,
+            0,
+            "{}: unbalanced quotes",
+            path.display()
+        );
+        if let Some(name) = tag.strip_prefix('/') {
+            assert_eq!(
+                open.pop(),
+                Some(name.trim()),
+                "{}: bad nesting",
+                path.display()
+            );
+        } else if !tag.ends_with('/') && !tag.starts_with('?') && !tag.starts_with('!') {
+            open.push(tag.split_whitespace().next().unwrap_or(""));
+        }
+        rest = &rest[end + 1..];
+    }
+    assert!(
+        open.is_empty(),
+        "{}: unclosed elements {open:?}",
+        path.display()
+    );
 }
 
 const BLUE: [u8; 3] = [0, 114, 178];
@@ -168,7 +216,8 @@ fn figures_of_a_synthetic_run_are_valid_png_and_svg_showing_their_labels() {
     let started = Instant::now();
     let files = figures::write_panel_figure(&dir, "fig07_uncompensated", &fig7).unwrap();
     let elapsed = started.elapsed();
-    // Generous for an unoptimised build on a shared machine; about 0.1 s in release.
+    eprintln!("fig07 (200 000 samples) drawn and written in {elapsed:?}");
+    // Generous for a test build on a shared machine.
     assert!(elapsed.as_secs_f64() < 10.0, "drawing took {elapsed:?}");
     assert_eq!(files.png, dir.join("fig07_uncompensated.png"));
     assert_drawn(&files.png, figures::PANEL_FIGURE_SIZE, &[BLUE]);
@@ -290,6 +339,20 @@ fn rewriting_a_figure_replaces_it_whole() {
     let svg = std::fs::read_to_string(&files.svg).unwrap();
     assert!(svg.contains("second series") && !svg.contains("first series"));
     assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 2);
+}
+
+#[test]
+fn markup_in_labels_is_escaped_in_the_svg() {
+    let dir = tempfile::tempdir().unwrap();
+    let x: Vec<f64> = (0..100).map(f64::from).collect();
+    let panel = Panel::time_series("a <b> & \"c\"", LABEL_POSITION)
+        .with_series("y < y_d & more", &x, &x)
+        .with_note("<script>alert(1)</script>");
+    let files = figures::write_panel_figure(dir.path(), "markup", &panel).unwrap();
+    let svg = std::fs::read_to_string(&files.svg).unwrap();
+    assert!(!svg.contains("<script>") && !svg.contains("<b>"));
+    assert!(svg.contains("y &lt; y_d &amp; more"));
+    assert_well_formed(&svg, &files.svg);
 }
 
 #[test]

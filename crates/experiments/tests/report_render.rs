@@ -218,6 +218,7 @@ fn run_chromium(browser: &Path, extra: &[String], page: &Path, stdout_file: &Pat
             "--disable-component-update",
             "--disable-sync",
             "--hide-scrollbars",
+            "--disable-dev-shm-usage",
         ])
         .arg(format!("--user-data-dir={}", profile.path().display()))
         .arg(format!("--window-size={},{}", WINDOW.0, WINDOW.1))
