@@ -1,10 +1,8 @@
 //! Inverse hysteresis compensation (IHC), eqs. (5)-(8).
 
-use crate::buffer::copied;
 use crate::compensator::OutputGuard;
-use crate::play::update_bank;
 use crate::solve::increasing_cubic_root;
-use crate::walk::{self, SegmentEquation};
+use crate::walk::{PlayBank, SegmentEquation};
 use crate::{Buffer, Compensator, CoreError, Diagnostics, Mpim, OutputLimits, Real, SolveMode};
 
 /// IHC, section 3.1: the inverse of the identified plant MPIM in the feedforward path,
@@ -19,20 +17,11 @@ use crate::{Buffer, Compensator, CoreError, Diagnostics, Mpim, OutputLimits, Rea
 /// See [`Compensator`] for the output guarantees.
 #[derive(Debug, Clone)]
 pub struct Ihc<T: Real, B: Buffer<T>> {
-    /// `r_hat_j` of eq. (7).
-    thresholds: B,
-    /// `b_hat_j` of eq. (7).
-    weights: B,
-    /// Memory of `F_{r_hat_j}[w]`.
-    memory: B,
+    /// `P1^{-1}[w] = a2_hat w + sum b_hat_j F_{r_hat_j}[w]` of eq. (7), with its memory; its
+    /// last input is the last `w`.
+    inverse: PlayBank<T, B>,
     a1: T,
-    /// `a2_hat` of eq. (7).
-    a2_hat: T,
     mode: SolveMode,
-    /// `sum b_hat_j w_hat_j` of the current memory.
-    memory_sum: T,
-    /// The last `w` fed to `P1^{-1}`.
-    w_prev: T,
     guard: OutputGuard<T>,
 }
 
@@ -47,14 +36,9 @@ impl<T: Real, B: Buffer<T>> Ihc<T, B> {
         plant.check_invertible(limits.min(), limits.max())?;
         let inverse = plant.pi_part_inverse()?;
         let mut ihc = Ihc {
-            thresholds: copied(inverse.thresholds())?,
-            weights: copied(inverse.weights())?,
-            memory: copied(inverse.memory())?,
+            inverse: PlayBank::new(inverse.a2(), inverse.thresholds(), inverse.weights())?,
             a1: plant.a1(),
-            a2_hat: inverse.a2(),
             mode,
-            memory_sum: T::zero(),
-            w_prev: T::zero(),
             guard: OutputGuard::new(limits),
         };
         ihc.reset();
@@ -70,26 +54,13 @@ impl<T: Real, B: Buffer<T>> Ihc<T, B> {
     /// thresholds `r_hat_j`, weights `b_hat_j`, `a2 = a2_hat`, and its current memory.
     pub fn pi_part_inverse(&self) -> Result<Mpim<T, B>, CoreError> {
         let mut model = Mpim::new(
-            self.thresholds.as_ref(),
-            self.weights.as_ref(),
+            self.inverse.thresholds(),
+            self.inverse.weights(),
             T::zero(),
-            self.a2_hat,
+            self.inverse.a(),
         )?;
-        model.set_memory(self.memory.as_ref())?;
+        model.set_memory(self.inverse.memory())?;
         Ok(model)
-    }
-
-    /// `P1^{-1}[w](t)` from the current memory, updating it.
-    #[inline]
-    fn feed(&mut self, w: T) -> T {
-        self.memory_sum = update_bank(
-            self.thresholds.as_ref(),
-            self.weights.as_ref(),
-            self.memory.as_mut(),
-            w,
-        );
-        self.w_prev = w;
-        self.a2_hat * w + self.memory_sum
     }
 }
 
@@ -156,30 +127,41 @@ impl<T: Real> SegmentEquation<T> for Eq5Delayed<T> {
     }
 }
 
+/// The `w` where `P1^{-1}[w] = control`, from the current memory (used to start at a limit).
+struct ReachControl<T> {
+    control: T,
+}
+
+impl<T: Real> SegmentEquation<T> for ReachControl<T> {
+    #[inline(always)]
+    fn residual(&self, w: T, alpha: T, beta: T) -> T {
+        alpha * w + beta - self.control
+    }
+    #[inline(always)]
+    fn control(&self, w: T, alpha: T, beta: T) -> T {
+        alpha * w + beta
+    }
+    #[inline(always)]
+    fn input_at_control(&self, v: T, alpha: T, beta: T) -> T {
+        (v - beta) / alpha
+    }
+    #[inline(always)]
+    fn root(&self, lo: T, hi: T, _f_lo: T, _f_hi: T, alpha: T, beta: T) -> T {
+        ((self.control - beta) / alpha).max(lo).min(hi)
+    }
+}
+
 impl<T: Real, B: Buffer<T>> Compensator<T> for Ihc<T, B> {
     fn reset(&mut self) {
-        self.memory.as_mut().fill(T::zero());
-        self.memory_sum = T::zero();
-        self.w_prev = T::zero();
+        self.inverse.reset();
         self.guard.reset();
         // The plant is assumed relaxed at input 0. When 0 lies outside the limits, start from
         // the nearest limit: feed the w that P1^{-1} maps to it (P1 from zero memory).
         let v0 = self.guard.previous;
         if v0 != T::zero() {
-            let equation = Eq5Delayed { w: T::zero() };
-            let limits = self.guard.limits;
-            let s = walk::solve(
-                &equation,
-                self.a2_hat,
-                self.thresholds.as_ref(),
-                self.weights.as_ref(),
-                self.memory.as_ref(),
-                T::zero(),
-                T::zero(),
-                if v0 > T::zero() { -T::one() } else { T::one() },
-                OutputLimits::new(v0.min(T::zero()), v0.max(T::zero())).unwrap_or(limits),
-            );
-            self.feed(s.input);
+            let equation = ReachControl { control: v0 };
+            let s = self.inverse.solve(&equation, -v0, self.guard.limits);
+            self.inverse.feed(s.input);
         }
     }
 
@@ -189,6 +171,8 @@ impl<T: Real, B: Buffer<T>> Compensator<T> for Ihc<T, B> {
             return self.guard.previous;
         };
         let v_prev = self.guard.previous;
+        let w_prev = self.inverse.input();
+        let cubic_prev = self.a1 * v_prev * v_prev * v_prev;
         let solution = match self.mode {
             SolveMode::Exact => {
                 let equation = Eq5Exact {
@@ -196,37 +180,17 @@ impl<T: Real, B: Buffer<T>> Compensator<T> for Ihc<T, B> {
                     desired,
                 };
                 // Residual at the previous sample: w_prev + a1 v_prev^3 - y_d.
-                let f_prev = self.w_prev + self.a1 * v_prev * v_prev * v_prev - desired;
-                walk::solve(
-                    &equation,
-                    self.a2_hat,
-                    self.thresholds.as_ref(),
-                    self.weights.as_ref(),
-                    self.memory.as_ref(),
-                    self.memory_sum,
-                    self.w_prev,
-                    f_prev,
-                    self.guard.limits,
-                )
+                self.inverse
+                    .solve(&equation, w_prev + cubic_prev - desired, self.guard.limits)
             }
             SolveMode::Delayed => {
                 // Eq. (5) with the loop broken: w(t) = y_d(t) - a1 v^3(t - Ts).
-                let w = desired - self.a1 * v_prev * v_prev * v_prev;
+                let w = desired - cubic_prev;
                 let equation = Eq5Delayed { w };
-                walk::solve(
-                    &equation,
-                    self.a2_hat,
-                    self.thresholds.as_ref(),
-                    self.weights.as_ref(),
-                    self.memory.as_ref(),
-                    self.memory_sum,
-                    self.w_prev,
-                    self.w_prev - w,
-                    self.guard.limits,
-                )
+                self.inverse.solve(&equation, w_prev - w, self.guard.limits)
             }
         };
-        let v = self.feed(solution.input);
+        let v = self.inverse.feed(solution.input);
         self.guard.emit(v, solution.saturated)
     }
 

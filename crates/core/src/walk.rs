@@ -9,8 +9,15 @@
 //! `alpha x + beta` in order. On each segment the compensator's equation is a cubic (or linear)
 //! residual; the walk stops at the first segment whose end makes the residual change sign and
 //! solves there. A running maximum (minimum) of the breakpoints absorbs rounding.
+//!
+//! The operators already moving at `x_prev` in the direction of the walk (the first
+//! `rising_active` or `falling_active` ones, counted by the previous update) are folded into
+//! the first segment in O(1) with prefix sums of the weights, so a small step costs a residual
+//! or two, a root solve and the memory update.
 
-use crate::{OutputLimits, Real};
+use crate::buffer::{copied, filled};
+use crate::play::one_sided;
+use crate::{Buffer, CoreError, OutputLimits, Real};
 
 /// The equation a compensator solves on one linear segment of the bank, `PI(x) = alpha x + beta`.
 pub(crate) trait SegmentEquation<T: Real> {
@@ -31,89 +38,225 @@ pub(crate) struct Solution<T> {
     pub saturated: bool,
 }
 
-/// Walks the segments of the bank `a x + sum b_i F_{r_i}[x]` from `x_prev` (where the residual
-/// is `f_prev`) in the direction that brings the residual to zero, keeping the control within
-/// `limits`.
-#[allow(clippy::too_many_arguments)]
-#[inline]
-pub(crate) fn solve<T: Real, E: SegmentEquation<T>>(
-    equation: &E,
+/// A bank of one-sided play operators with a linear term, `a x + sum_i b_i F_{r_i}[x]`, and
+/// what the exact solve needs to know about its state.
+#[derive(Debug, Clone)]
+pub(crate) struct PlayBank<T: Real, B: Buffer<T>> {
+    thresholds: B,
+    weights: B,
+    /// `prefix[k] = b_1 + ... + b_{k+1}`.
+    prefix: B,
+    memory: B,
     a: T,
-    thresholds: &[T],
-    weights: &[T],
-    memory: &[T],
+    /// The last input fed.
+    input: T,
+    /// `sum_i b_i w_i` of the current memory.
     memory_sum: T,
-    x_prev: T,
-    f_prev: T,
-    limits: OutputLimits<T>,
-) -> Solution<T> {
-    let mut alpha = a;
-    let mut beta = memory_sum;
-    if f_prev <= T::zero() {
-        // Rising.
-        let (mut lo, mut f_lo) = (x_prev, f_prev);
-        let v_max = limits.max();
-        for ((&w, &r), &b) in memory.iter().zip(thresholds).zip(weights) {
-            let u = (w + r).max(lo);
-            if equation.control(u, alpha, beta) >= v_max {
-                break;
+    /// How many operators (the first ones) moved up with the last input: `w_i = x - r_i`.
+    rising_active: usize,
+    /// How many operators (the first ones) moved down with the last input: `w_i = x`.
+    falling_active: usize,
+}
+
+impl<T: Real, B: Buffer<T>> PlayBank<T, B> {
+    /// A bank at the reset state (zero memory, last input 0).
+    pub fn new(a: T, thresholds: &[T], weights: &[T]) -> Result<Self, CoreError> {
+        let mut prefix: B = filled(T::zero(), weights.len())?;
+        let mut sum = T::zero();
+        for (p, &b) in prefix.as_mut().iter_mut().zip(weights) {
+            sum = sum + b;
+            *p = sum;
+        }
+        let mut bank = PlayBank {
+            thresholds: copied(thresholds)?,
+            weights: copied(weights)?,
+            prefix,
+            memory: filled(T::zero(), weights.len())?,
+            a,
+            input: T::zero(),
+            memory_sum: T::zero(),
+            rising_active: 0,
+            falling_active: 0,
+        };
+        bank.reset();
+        Ok(bank)
+    }
+
+    /// Zero memory, last input 0 (eq. (1)).
+    pub fn reset(&mut self) {
+        self.memory.as_mut().fill(T::zero());
+        self.input = T::zero();
+        self.memory_sum = T::zero();
+        let zero = T::zero();
+        // At x = 0 with zero memory every operator sits at its lower edge (w = x), and those
+        // with r = 0 also at their upper edge.
+        self.rising_active = self
+            .thresholds
+            .as_ref()
+            .iter()
+            .take_while(|r| **r <= zero)
+            .count();
+        self.falling_active = self.thresholds.as_ref().len();
+    }
+
+    pub fn thresholds(&self) -> &[T] {
+        self.thresholds.as_ref()
+    }
+
+    pub fn weights(&self) -> &[T] {
+        self.weights.as_ref()
+    }
+
+    pub fn memory(&self) -> &[T] {
+        self.memory.as_ref()
+    }
+
+    /// The coefficient `a` of the linear term.
+    pub fn a(&self) -> T {
+        self.a
+    }
+
+    /// The last input fed.
+    pub fn input(&self) -> T {
+        self.input
+    }
+
+    /// `sum_i b_i w_i` of the current memory.
+    pub fn memory_sum(&self) -> T {
+        self.memory_sum
+    }
+
+    /// The bank's output at the last input: `a x + sum_i b_i w_i`.
+    pub fn output(&self) -> T {
+        self.a * self.input + self.memory_sum
+    }
+
+    /// Feeds `x` (eqs. (1)-(2)), updating the memory and the counts of moving operators.
+    /// Returns the bank's output `a x + sum b_i F_{r_i}[x]`.
+    #[inline]
+    pub fn feed(&mut self, x: T) -> T {
+        // Two alternating partial sums: the compensators are latency-bound (each sample's solve
+        // waits for the previous sample's memory sum), and two chains halve its length.
+        let (mut sum, mut other) = (T::zero(), T::zero());
+        let mut rising = 0usize;
+        let mut falling = 0usize;
+        for ((w, &r), &b) in self
+            .memory
+            .as_mut()
+            .iter_mut()
+            .zip(self.thresholds.as_ref())
+            .zip(self.weights.as_ref())
+        {
+            let lower = x - r;
+            let next = one_sided(x, r, *w);
+            rising += usize::from(next <= lower);
+            falling += usize::from(next >= x);
+            *w = next;
+            sum = sum + b * next;
+            core::mem::swap(&mut sum, &mut other);
+        }
+        let sum = sum + other;
+        self.input = x;
+        self.memory_sum = sum;
+        self.rising_active = rising;
+        self.falling_active = falling;
+        self.a * x + sum
+    }
+
+    /// Walks the segments of the bank from the last input (where the residual is `f_prev`) in
+    /// the direction that brings the residual to zero, keeping the control within `limits`.
+    #[inline]
+    pub fn solve<E: SegmentEquation<T>>(
+        &self,
+        equation: &E,
+        f_prev: T,
+        limits: OutputLimits<T>,
+    ) -> Solution<T> {
+        let thresholds = self.thresholds.as_ref();
+        let weights = self.weights.as_ref();
+        let memory = self.memory.as_ref();
+        let x_prev = self.input;
+        let rising = f_prev <= T::zero();
+        let active = if rising {
+            self.rising_active
+        } else {
+            self.falling_active
+        };
+        // The moving operators contribute b_i x to the output: w_i + r_i = x_prev rising,
+        // w_i = x_prev falling, so their held part is b_i x_prev either way.
+        let moving = if active == 0 {
+            T::zero()
+        } else {
+            self.prefix.as_ref()[active - 1]
+        };
+        let mut alpha = self.a + moving;
+        let mut beta = self.memory_sum - moving * x_prev;
+        if rising {
+            let (mut lo, mut f_lo) = (x_prev, f_prev);
+            let v_max = limits.max();
+            for i in active..weights.len() {
+                let (w, r, b) = (memory[i], thresholds[i], weights[i]);
+                let u = (w + r).max(lo);
+                if equation.control(u, alpha, beta) >= v_max {
+                    break;
+                }
+                let f_u = equation.residual(u, alpha, beta);
+                if f_u >= T::zero() {
+                    return Solution {
+                        input: equation.root(lo, u, f_lo, f_u, alpha, beta),
+                        saturated: false,
+                    };
+                }
+                alpha = alpha + b;
+                beta = beta - b * (r + w);
+                lo = u;
+                f_lo = f_u;
             }
-            let f_u = equation.residual(u, alpha, beta);
-            if f_u >= T::zero() {
+            let end = equation.input_at_control(v_max, alpha, beta);
+            let f_end = equation.residual(end, alpha, beta);
+            if f_end < T::zero() {
                 return Solution {
-                    input: equation.root(lo, u, f_lo, f_u, alpha, beta),
-                    saturated: false,
+                    input: end,
+                    saturated: true,
                 };
             }
-            alpha = alpha + b;
-            beta = beta - b * (r + w);
-            lo = u;
-            f_lo = f_u;
-        }
-        let end = equation.input_at_control(v_max, alpha, beta);
-        let f_end = equation.residual(end, alpha, beta);
-        if f_end < T::zero() {
-            return Solution {
-                input: end,
-                saturated: true,
-            };
-        }
-        Solution {
-            input: equation.root(lo, end, f_lo, f_end, alpha, beta),
-            saturated: false,
-        }
-    } else {
-        // Falling.
-        let (mut hi, mut f_hi) = (x_prev, f_prev);
-        let v_min = limits.min();
-        for (&w, &b) in memory.iter().zip(weights) {
-            let l = w.min(hi);
-            if equation.control(l, alpha, beta) <= v_min {
-                break;
+            Solution {
+                input: equation.root(lo, end, f_lo, f_end, alpha, beta),
+                saturated: false,
             }
-            let f_l = equation.residual(l, alpha, beta);
-            if f_l <= T::zero() {
+        } else {
+            let (mut hi, mut f_hi) = (x_prev, f_prev);
+            let v_min = limits.min();
+            for i in active..weights.len() {
+                let (w, b) = (memory[i], weights[i]);
+                let l = w.min(hi);
+                if equation.control(l, alpha, beta) <= v_min {
+                    break;
+                }
+                let f_l = equation.residual(l, alpha, beta);
+                if f_l <= T::zero() {
+                    return Solution {
+                        input: equation.root(l, hi, f_l, f_hi, alpha, beta),
+                        saturated: false,
+                    };
+                }
+                alpha = alpha + b;
+                beta = beta - b * w;
+                hi = l;
+                f_hi = f_l;
+            }
+            let end = equation.input_at_control(v_min, alpha, beta);
+            let f_end = equation.residual(end, alpha, beta);
+            if f_end > T::zero() {
                 return Solution {
-                    input: equation.root(l, hi, f_l, f_hi, alpha, beta),
-                    saturated: false,
+                    input: end,
+                    saturated: true,
                 };
             }
-            alpha = alpha + b;
-            beta = beta - b * w;
-            hi = l;
-            f_hi = f_l;
-        }
-        let end = equation.input_at_control(v_min, alpha, beta);
-        let f_end = equation.residual(end, alpha, beta);
-        if f_end > T::zero() {
-            return Solution {
-                input: end,
-                saturated: true,
-            };
-        }
-        Solution {
-            input: equation.root(end, hi, f_end, f_hi, alpha, beta),
-            saturated: false,
+            Solution {
+                input: equation.root(end, hi, f_end, f_hi, alpha, beta),
+                saturated: false,
+            }
         }
     }
 }

@@ -1,10 +1,8 @@
 //! Without-inverse hysteresis compensation (WIHC), eq. (9).
 
-use crate::buffer::{copied, filled};
 use crate::compensator::OutputGuard;
-use crate::play::update_bank;
 use crate::solve::increasing_cubic_root;
-use crate::walk::{self, SegmentEquation};
+use crate::walk::{PlayBank, SegmentEquation};
 use crate::{Buffer, Compensator, CoreError, Diagnostics, Mpim, OutputLimits, Real, SolveMode};
 
 /// WIHC, section 3.2: the identified plant MPIM used directly in a multiplicative structure,
@@ -19,14 +17,11 @@ use crate::{Buffer, Compensator, CoreError, Diagnostics, Mpim, OutputLimits, Rea
 /// See [`Compensator`] for the output guarantees.
 #[derive(Debug, Clone)]
 pub struct Wihc<T: Real, B: Buffer<T>> {
-    thresholds: B,
-    weights: B,
-    memory: B,
+    /// `a2 v + sum b_i F_{r_i}[v]`: the plant model without its cubic term.
+    bank: PlayBank<T, B>,
     a1: T,
     a2: T,
     mode: SolveMode,
-    /// `sum b_i w_i` of the current memory.
-    memory_sum: T,
     guard: OutputGuard<T>,
 }
 
@@ -49,13 +44,10 @@ impl<T: Real, B: Buffer<T>> Wihc<T, B> {
             check_delayed_contraction(plant, limits)?;
         }
         let mut wihc = Wihc {
-            thresholds: copied(plant.thresholds())?,
-            weights: copied(plant.weights())?,
-            memory: filled(T::zero(), plant.len())?,
+            bank: PlayBank::new(a2, plant.thresholds(), plant.weights())?,
             a1,
             a2,
             mode,
-            memory_sum: T::zero(),
             guard: OutputGuard::new(limits),
         };
         wihc.reset();
@@ -70,7 +62,7 @@ impl<T: Real, B: Buffer<T>> Wihc<T, B> {
     /// The plant model's operators' memory as the compensator tracks it (the memory of
     /// `F_{r_i}[v]` for the voltages emitted so far).
     pub fn memory(&self) -> &[T] {
-        self.memory.as_ref()
+        self.bank.memory()
     }
 }
 
@@ -132,17 +124,14 @@ impl<T: Real> SegmentEquation<T> for Eq9<T> {
 
 impl<T: Real, B: Buffer<T>> Compensator<T> for Wihc<T, B> {
     fn reset(&mut self) {
-        self.memory.as_mut().fill(T::zero());
-        self.memory_sum = T::zero();
+        self.bank.reset();
         self.guard.reset();
-        // The plant is assumed relaxed at input 0; bring the memory to the first output.
+        // The plant is assumed relaxed at input 0; when 0 lies outside the limits, the
+        // compensator starts at the nearest limit, and the plant with it.
         let v0 = self.guard.previous;
-        self.memory_sum = update_bank(
-            self.thresholds.as_ref(),
-            self.weights.as_ref(),
-            self.memory.as_mut(),
-            v0,
-        );
+        if v0 != T::zero() {
+            self.bank.feed(v0);
+        }
     }
 
     #[inline]
@@ -150,40 +139,25 @@ impl<T: Real, B: Buffer<T>> Compensator<T> for Wihc<T, B> {
         let Some(desired) = self.guard.accept(desired) else {
             return self.guard.previous;
         };
-        let v_prev = self.guard.previous;
+        let v_prev = self.bank.input();
         let (v, saturated) = match self.mode {
             SolveMode::Exact => {
                 let equation = Eq9 {
                     a1: self.a1,
                     desired,
                 };
-                let f_prev = equation.residual(v_prev, self.a2, self.memory_sum);
-                let s = walk::solve(
-                    &equation,
-                    self.a2,
-                    self.thresholds.as_ref(),
-                    self.weights.as_ref(),
-                    self.memory.as_ref(),
-                    self.memory_sum,
-                    v_prev,
-                    f_prev,
-                    self.guard.limits,
-                );
+                let f_prev = self.a1 * v_prev * v_prev * v_prev + self.bank.output() - desired;
+                let s = self.bank.solve(&equation, f_prev, self.guard.limits);
                 (s.input, s.saturated)
             }
             SolveMode::Delayed => {
                 // H[v](t - Ts) = a1 v^3(t - Ts) + sum b_i F_{r_i}[v](t - Ts).
-                let h_prev = self.a1 * v_prev * v_prev * v_prev + self.memory_sum;
+                let h_prev = self.a1 * v_prev * v_prev * v_prev + self.bank.memory_sum();
                 ((desired - h_prev) / self.a2, false)
             }
         };
         let v = self.guard.emit(v, saturated);
-        self.memory_sum = update_bank(
-            self.thresholds.as_ref(),
-            self.weights.as_ref(),
-            self.memory.as_mut(),
-            v,
-        );
+        self.bank.feed(v);
         v
     }
 
