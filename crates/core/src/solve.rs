@@ -72,7 +72,8 @@ pub(crate) fn increasing_cubic_root<T: Real>(
         if hi - lo <= tolerance * next.abs().max(T::one()) {
             return next;
         }
-        refresh = !(f_next.abs() <= chord_gain * f.abs());
+        // A fresh Newton slope unless the chord step cut the residual by 1e3 (NaN: refresh).
+        refresh = f_next.abs() > chord_gain * f.abs() || f_next.is_nan();
         x = next;
         f = f_next;
     }
