@@ -4,40 +4,19 @@
 //! (divide 1e9 by it for nanoseconds per sample).
 
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion, Throughput};
-use hystcomp_core::{Compensator, Dihc, Ihc, Mpim, OutputLimits, Real, SolveMode, Wihc};
+use hystcomp_core::{paper, Compensator, Dihc, Ihc, Mpim, OutputLimits, Real, SolveMode, Wihc};
 use std::hint::black_box;
 
 const SAMPLES: usize = 10_000;
 
-/// A plant with `n` operators at thresholds (i - 1)/n, shaped like Table 1 (decaying
-/// positive weights, a softening cubic), invertible on [0, 1].
+/// Table 1 of the paper spread over `n` operators (invertible on [0, 1]).
 fn plant<T: Real>(n: usize) -> Mpim<T, Vec<T>> {
-    let thresholds: Vec<T> = (0..n).map(|i| T::from_f64(i as f64 / n as f64)).collect();
-    let total = 0.77;
-    let norm: f64 = (0..n).map(|i| (-3.0 * i as f64 / n as f64).exp()).sum();
-    let weights: Vec<T> = (0..n)
-        .map(|i| T::from_f64(total * (-3.0 * i as f64 / n as f64).exp() / norm))
-        .collect();
-    Mpim::new(
-        &thresholds,
-        &weights,
-        T::from_f64(-0.1569),
-        T::from_f64(0.4603),
-    )
-    .unwrap()
+    paper::TABLE1.spread(n).unwrap()
 }
 
-/// An inverse model with the shape of Table 2, scaled to `n` operators.
+/// Table 2 of the paper spread over `n` operators.
 fn inverse<T: Real>(n: usize) -> Mpim<T, Vec<T>> {
-    let thresholds: Vec<T> = (0..n).map(|i| T::from_f64(i as f64 / n as f64)).collect();
-    let weights: Vec<T> = (0..n).map(|_| T::from_f64(-0.5 / n as f64)).collect();
-    Mpim::new(
-        &thresholds,
-        &weights,
-        T::from_f64(0.1608),
-        T::from_f64(1.2588),
-    )
-    .unwrap()
+    paper::TABLE2.spread(n).unwrap()
 }
 
 /// The paper's three-tone trajectory shape, normalised into the reachable range of the plant:

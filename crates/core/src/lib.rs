@@ -51,6 +51,7 @@ mod error;
 mod ihc;
 mod invertibility;
 mod mpim;
+pub mod paper;
 mod play;
 mod real;
 mod solve;

@@ -200,3 +200,18 @@ fn model_builder_refuses_each_bad_parameter_with_the_reason() {
         "{fixed}"
     );
 }
+
+#[test]
+fn spreading_a_published_model_keeps_its_major_loop() {
+    // Spreading each operator over 10 thresholds 0.01 apart changes the loop by at most the
+    // spread: compare both on a major loop and a minor loop.
+    let table: VecMpim = hystcomp_core::paper::TABLE1.model().unwrap();
+    let mut coarse = table.clone();
+    let mut fine: VecMpim = hystcomp_core::paper::TABLE1.spread(100).unwrap();
+    assert_eq!(fine.len(), 100);
+    let mut rng = rng(6);
+    for x in random_input(&mut rng, 2000, 0.0, 1.0) {
+        let (a, b) = (coarse.step(x), fine.step(x));
+        assert!((a - b).abs() < 0.05 * 0.77, "{a} vs {b}");
+    }
+}

@@ -2,26 +2,21 @@
 //! and plain reference implementations (the oracles the fast paths are checked against).
 #![allow(dead_code)]
 
-use hystcomp_core::{Mpim, OutputLimits};
+use hystcomp_core::{paper, Mpim, OutputLimits};
 use proptest::test_runner::{Config, RngSeed};
 use rand::{Rng, RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
 /// Table 1 of the paper (plant model for IHC and WIHC).
-pub const TABLE1_R: [f64; 10] = [0.0, 0.1, 0.2, 0.3, 0.4, 0.5, 0.6, 0.7, 0.8, 0.9];
-pub const TABLE1_B: [f64; 10] = [
-    0.2313, 0.3059, 0.0155, 0.0752, 0.0683, 0.0252, 0.0035, 0.0094, 0.0264, 0.0032,
-];
-pub const TABLE1_A1: f64 = -0.1569;
-pub const TABLE1_A2: f64 = 0.4603;
+pub const TABLE1_R: [f64; 10] = paper::TABLE1.thresholds;
+pub const TABLE1_B: [f64; 10] = paper::TABLE1.weights;
+pub const TABLE1_A1: f64 = paper::TABLE1.a1;
+pub const TABLE1_A2: f64 = paper::TABLE1.a2;
 
 /// Table 2 of the paper (inverse model for DIHC).
-pub const TABLE2_B: [f64; 10] = [
-    -0.00002, -0.26603, -0.10684, -0.01221, -0.08412, -0.00238, -0.00328, -0.01115, -0.03417,
-    -0.47999,
-];
-pub const TABLE2_A1: f64 = 0.1608;
-pub const TABLE2_A2: f64 = 1.2588;
+pub const TABLE2_B: [f64; 10] = paper::TABLE2.weights;
+pub const TABLE2_A1: f64 = paper::TABLE2.a1;
+pub const TABLE2_A2: f64 = paper::TABLE2.a2;
 
 pub type VecMpim = Mpim<f64, Vec<f64>>;
 
