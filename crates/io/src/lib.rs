@@ -4,8 +4,10 @@
 //!   normalised MPIM parameters and the direction the model maps);
 //! - [`data`]: measured or desired records from CSV and MATLAB Level-5 `.mat` files, with
 //!   errors a person can act on;
-//! - [`atomic`]: files written atomically (temporary file, then rename).
+//! - [`atomic`]: files written atomically (temporary file, then rename);
+//! - [`compensator`]: a compensator built from a model file, in physical units.
 
 pub mod atomic;
+pub mod compensator;
 pub mod data;
 pub mod model_file;

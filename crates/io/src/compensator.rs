@@ -1,0 +1,308 @@
+//! A compensator built from a model file, in physical units: desired position in (e.g. um),
+//! drive voltage out (e.g. V). The scaling lives here, once, for the command line, the
+//! bindings and the study; the control law is the core's.
+
+use std::fmt;
+use std::str::FromStr;
+
+use hystcomp_core::{
+    Compensator, CoreError, Diagnostics, Dihc, Ihc, Mpim, OutputLimits, SolveMode, Wihc,
+};
+use serde::{Deserialize, Serialize};
+
+use crate::model_file::{Direction, ModelFile, Scale};
+
+/// The five compensators of the toolkit (section 3 of the paper, with the exact and the
+/// delayed solution of the implicit laws).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Method {
+    /// IHC, eqs. (5)-(8), implicit equation solved exactly each sample.
+    Ihc,
+    /// IHC with `v(t - Ts)` in the cubic term (real-time Simulink style).
+    IhcDelayed,
+    /// WIHC, eq. (9), implicit equation solved exactly each sample.
+    Wihc,
+    /// WIHC with `H[v](t - Ts)` (real-time Simulink style).
+    WihcDelayed,
+    /// DIHC, eq. (10): an inverse model evaluated on the desired trajectory.
+    Dihc,
+}
+
+impl Method {
+    /// Every method, in the order of the paper.
+    pub const ALL: [Method; 5] = [
+        Method::Ihc,
+        Method::IhcDelayed,
+        Method::Wihc,
+        Method::WihcDelayed,
+        Method::Dihc,
+    ];
+
+    /// The name used on the command line and in files: `ihc`, `ihc-delayed`, ...
+    pub fn name(self) -> &'static str {
+        match self {
+            Method::Ihc => "ihc",
+            Method::IhcDelayed => "ihc-delayed",
+            Method::Wihc => "wihc",
+            Method::WihcDelayed => "wihc-delayed",
+            Method::Dihc => "dihc",
+        }
+    }
+
+    /// The direction of model the method needs: a plant model for IHC and WIHC, an inverse
+    /// model for DIHC.
+    pub fn needs(self) -> Direction {
+        match self {
+            Method::Dihc => Direction::Inverse,
+            _ => Direction::Plant,
+        }
+    }
+}
+
+impl fmt::Display for Method {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+impl FromStr for Method {
+    type Err = CompensatorError;
+
+    fn from_str(s: &str) -> Result<Self, Self::Err> {
+        Method::ALL
+            .into_iter()
+            .find(|m| m.name().eq_ignore_ascii_case(s.trim()))
+            .ok_or_else(|| CompensatorError::UnknownMethod(s.to_string()))
+    }
+}
+
+/// Why a compensator could not be built from a model file.
+#[derive(Debug, Clone, PartialEq)]
+pub enum CompensatorError {
+    /// Not one of `ihc`, `ihc-delayed`, `wihc`, `wihc-delayed`, `dihc`.
+    UnknownMethod(String),
+    /// The method needs the other direction of model.
+    WrongDirection {
+        /// The method asked for.
+        method: Method,
+        /// The direction of the model given.
+        found: Direction,
+    },
+    /// The output limits are not finite and increasing.
+    InvalidLimits {
+        /// Lower limit, physical units.
+        min: f64,
+        /// Upper limit, physical units.
+        max: f64,
+        /// The unit.
+        unit: String,
+    },
+    /// The core refused the model (not invertible, ...).
+    Core(CoreError),
+}
+
+impl fmt::Display for CompensatorError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            CompensatorError::UnknownMethod(s) => write!(
+                f,
+                "unknown method {s:?}; choose one of ihc, ihc-delayed, wihc, wihc-delayed, dihc"
+            ),
+            CompensatorError::WrongDirection { method, found } => write!(
+                f,
+                "{method} needs {} model, but this model file maps {found} ({}); {}",
+                match method.needs() {
+                    Direction::Plant => "a plant",
+                    Direction::Inverse => "an inverse",
+                },
+                match found {
+                    Direction::Plant => "voltage to displacement",
+                    Direction::Inverse => "displacement to voltage",
+                },
+                match method.needs() {
+                    Direction::Plant => {
+                        "identify a plant model (hystcomp identify --direction plant) or use --method dihc"
+                    }
+                    Direction::Inverse => {
+                        "identify an inverse model (hystcomp identify --direction inverse) or use ihc or wihc"
+                    }
+                }
+            ),
+            CompensatorError::InvalidLimits { min, max, unit } => write!(
+                f,
+                "output limits [{min}, {max}] {unit} are invalid: both must be finite and min < max"
+            ),
+            CompensatorError::Core(e) => write!(f, "{e}"),
+        }
+    }
+}
+
+impl std::error::Error for CompensatorError {}
+
+impl From<CoreError> for CompensatorError {
+    fn from(e: CoreError) -> Self {
+        CompensatorError::Core(e)
+    }
+}
+
+/// A compensator from a model file, in physical units.
+///
+/// `step(desired)` takes the desired position in the model's displacement unit and returns the
+/// drive voltage in its voltage unit, always within [`ScaledCompensator::limits`], never NaN
+/// (see [`hystcomp_core::Compensator`]).
+pub struct ScaledCompensator {
+    inner: Box<dyn Compensator<f64> + Send>,
+    method: Method,
+    /// Physical meaning of the desired position (the compensator's input).
+    desired: Scale,
+    /// Physical meaning of the control (the compensator's output).
+    control: Scale,
+    limits: (f64, f64),
+}
+
+impl fmt::Debug for ScaledCompensator {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.debug_struct("ScaledCompensator")
+            .field("method", &self.method)
+            .field("desired", &self.desired)
+            .field("control", &self.control)
+            .field("limits", &self.limits)
+            .finish()
+    }
+}
+
+impl ScaledCompensator {
+    /// Builds `method` from `model`. `limits` are the drive limits in the model's voltage unit;
+    /// without them, the voltage range the model was identified on (a plant model's
+    /// `input_range`; an inverse model's normalised output range [0, 1]).
+    pub fn new(
+        model: &ModelFile,
+        method: Method,
+        limits: Option<(f64, f64)>,
+    ) -> Result<Self, CompensatorError> {
+        if model.direction != method.needs() {
+            return Err(CompensatorError::WrongDirection {
+                method,
+                found: model.direction,
+            });
+        }
+        let (desired, control) = match model.direction {
+            Direction::Plant => (model.output.clone(), model.input.clone()),
+            Direction::Inverse => (model.input.clone(), model.output.clone()),
+        };
+        let default_normalised = match model.direction {
+            Direction::Plant => (model.input_range[0], model.input_range[1]),
+            Direction::Inverse => (0.0, 1.0),
+        };
+        let (min, max) = limits.unwrap_or((
+            control.to_physical(default_normalised.0),
+            control.to_physical(default_normalised.1),
+        ));
+        if !(min.is_finite() && max.is_finite() && min < max) {
+            return Err(CompensatorError::InvalidLimits {
+                min,
+                max,
+                unit: control.unit.clone(),
+            });
+        }
+        let normalised = OutputLimits::new(control.normalise(min), control.normalise(max))?;
+        let mpim: Mpim<f64, Vec<f64>> =
+            Mpim::new(&model.thresholds, &model.weights, model.a1, model.a2)?;
+        let inner: Box<dyn Compensator<f64> + Send> = match method {
+            Method::Ihc => Box::new(Ihc::<f64, Vec<f64>>::new(
+                &mpim,
+                normalised,
+                SolveMode::Exact,
+            )?),
+            Method::IhcDelayed => Box::new(Ihc::<f64, Vec<f64>>::new(
+                &mpim,
+                normalised,
+                SolveMode::Delayed,
+            )?),
+            Method::Wihc => Box::new(Wihc::<f64, Vec<f64>>::new(
+                &mpim,
+                normalised,
+                SolveMode::Exact,
+            )?),
+            Method::WihcDelayed => Box::new(Wihc::<f64, Vec<f64>>::new(
+                &mpim,
+                normalised,
+                SolveMode::Delayed,
+            )?),
+            Method::Dihc => Box::new(Dihc::<f64, Vec<f64>>::new(
+                &mpim,
+                model.input_range[0],
+                model.input_range[1],
+                normalised,
+            )?),
+        };
+        Ok(ScaledCompensator {
+            inner,
+            method,
+            desired,
+            control,
+            limits: (min, max),
+        })
+    }
+
+    /// The method.
+    pub fn method(&self) -> Method {
+        self.method
+    }
+
+    /// The drive limits `(min, max)`, in [`ScaledCompensator::control_unit`].
+    pub fn limits(&self) -> (f64, f64) {
+        self.limits
+    }
+
+    /// The unit of the desired position (the input).
+    pub fn desired_unit(&self) -> &str {
+        &self.desired.unit
+    }
+
+    /// The unit of the drive voltage (the output).
+    pub fn control_unit(&self) -> &str {
+        &self.control.unit
+    }
+
+    /// Back to the initial state (operators' memory zero, eq. (1)).
+    pub fn reset(&mut self) {
+        self.inner.reset();
+    }
+
+    /// One sample: the drive for the desired position `desired` (physical units).
+    #[inline]
+    pub fn step(&mut self, desired: f64) -> f64 {
+        let v = self
+            .control
+            .to_physical(self.inner.step(self.desired.normalise(desired)));
+        // The normalised limits map onto the physical ones up to rounding; clamp once more so
+        // that the physical output never leaves them, not even by an ulp.
+        v.clamp(self.limits.0, self.limits.1)
+    }
+
+    /// A whole signal; refuses slices of different lengths.
+    pub fn process(
+        &mut self,
+        desired: &[f64],
+        control: &mut [f64],
+    ) -> Result<(), CompensatorError> {
+        if desired.len() != control.len() {
+            return Err(CompensatorError::Core(CoreError::LengthMismatch {
+                what: "control",
+                expected: desired.len(),
+                found: control.len(),
+            }));
+        }
+        for (d, c) in desired.iter().zip(control.iter_mut()) {
+            *c = self.step(*d);
+        }
+        Ok(())
+    }
+
+    /// Saturated and non-finite samples since the last reset.
+    pub fn diagnostics(&self) -> Diagnostics {
+        self.inner.diagnostics()
+    }
+}

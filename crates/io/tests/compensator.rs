@@ -1,0 +1,106 @@
+//! Compensators built from model files, in physical units.
+
+use std::path::PathBuf;
+
+use hystcomp_io::compensator::{CompensatorError, Method, ScaledCompensator};
+use hystcomp_io::model_file::ModelFile;
+use proptest::prelude::*;
+use proptest::test_runner::{Config, RngSeed};
+
+fn example(name: &str) -> ModelFile {
+    ModelFile::load(
+        &PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+            .join("../../models")
+            .join(name),
+    )
+    .unwrap()
+}
+
+#[test]
+fn plant_compensators_round_trip_in_physical_units() {
+    let file = example("table1-plant.json");
+    let mut plant = file.model().unwrap();
+    // Desired positions (um) produced by a voltage sweep (V) through the plant.
+    let volts: Vec<f64> = (0..3000)
+        .map(|k| 5.0 + 4.5 * (k as f64 * 0.004).sin() * (k as f64 * 0.0007).cos())
+        .collect();
+    let desired: Vec<f64> = volts
+        .iter()
+        .map(|&v| file.output_to_physical(plant.step(file.normalise_input(v))))
+        .collect();
+    for method in [Method::Ihc, Method::Wihc] {
+        let mut c = ScaledCompensator::new(&file, method, None).unwrap();
+        assert_eq!(c.limits(), (0.0, 10.0));
+        assert_eq!((c.desired_unit(), c.control_unit()), ("um", "V"));
+        let mut out = vec![0.0; desired.len()];
+        c.process(&desired, &mut out).unwrap();
+        for (k, (v, v_true)) in out.iter().zip(&volts).enumerate() {
+            assert!(
+                (v - v_true).abs() < 1e-8,
+                "{method} sample {k}: {v} V vs {v_true} V"
+            );
+        }
+        assert_eq!(c.diagnostics().saturated, 0);
+    }
+}
+
+#[test]
+fn each_method_needs_its_direction_of_model() {
+    let plant = example("table1-plant.json");
+    let inverse = example("table2-inverse.json");
+    let err = ScaledCompensator::new(&plant, Method::Dihc, None).unwrap_err();
+    assert!(matches!(err, CompensatorError::WrongDirection { .. }));
+    assert!(err.to_string().contains("dihc needs an inverse model"), "{err}");
+    let err = ScaledCompensator::new(&inverse, Method::Ihc, None).unwrap_err();
+    assert!(err.to_string().contains("ihc needs a plant model"), "{err}");
+    assert!(ScaledCompensator::new(&inverse, Method::Dihc, None).is_ok());
+}
+
+#[test]
+fn methods_parse_by_name_and_bad_limits_are_refused() {
+    for m in Method::ALL {
+        assert_eq!(m.name().parse::<Method>().unwrap(), m);
+    }
+    assert!("ihc_exact"
+        .parse::<Method>()
+        .unwrap_err()
+        .to_string()
+        .contains("choose one of"));
+    let plant = example("table1-plant.json");
+    for limits in [(5.0, 1.0), (0.0, f64::NAN), (f64::NEG_INFINITY, 1.0)] {
+        let err = ScaledCompensator::new(&plant, Method::Ihc, Some(limits)).unwrap_err();
+        assert!(
+            matches!(err, CompensatorError::InvalidLimits { .. }),
+            "{err:?}"
+        );
+    }
+}
+
+proptest! {
+    #![proptest_config(Config { cases: 64, rng_seed: RngSeed::Fixed(7), failure_persistence: None, ..Config::default() })]
+
+    /// The physical drive never leaves the limits and is never NaN, whatever is fed.
+    #[test]
+    fn physical_output_stays_within_the_limits(
+        desired in prop::collection::vec(prop_oneof![
+            4 => -50.0f64..150.0,
+            1 => Just(f64::NAN),
+            1 => Just(f64::INFINITY),
+            1 => any::<f64>(),
+        ], 1..200),
+        lo in 0.0f64..4.0,
+        width in 0.1f64..6.0,
+    ) {
+        let plant = example("table1-plant.json");
+        let inverse = example("table2-inverse.json");
+        let limits = (lo, lo + width);
+        for method in Method::ALL {
+            let file = if method == Method::Dihc { &inverse } else { &plant };
+            let mut c = ScaledCompensator::new(file, method, Some(limits)).unwrap();
+            for &d in &desired {
+                let v = c.step(d);
+                prop_assert!(v >= limits.0 && v <= limits.1, "{} gave {} for {}", method, v, d);
+            }
+        }
+    }
+}
