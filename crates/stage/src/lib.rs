@@ -3,7 +3,7 @@
 //! flexure stage (75 um nominal) -> strain gauge -> 16-bit ADC, sampled at 10 kHz.
 //!
 //! Each part is modelled from physics, not from the MPIM the compensators use:
-//! - [`Quantiser`](converters)-style DAC and ADC (uniform codes over +-10 V);
+//! - DAC and ADC: uniform 16-bit codes over +-10 V, clamped at the ends of the span;
 //! - the amplifier: gain, rails, first-order small-signal bandwidth and a slew-rate limit
 //!   `I_max / C` into the stack's capacitance, integrated exactly over each sample;
 //! - rate-independent hysteresis ([`Hysteresis`]): a Preisach model with a smooth asymmetric

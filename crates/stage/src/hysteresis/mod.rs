@@ -1,14 +1,14 @@
 //! Rate-independent hysteresis of the piezo stack: the displacement (creep-free, before the
 //! stage's dynamics) as a functional of the amplifier voltage.
 //!
-//! Two models are built in, chosen by [`HysteresisModel`](crate::HysteresisModel):
+//! Two models are built in, chosen by [`HysteresisModel`]:
 //! - [`PreisachHysteresis`] (the default): a Preisach model with a smooth, asymmetric density,
 //!   evaluated with the memory of dominant extrema and an Everett-function table;
 //! - [`BoucWenHysteresis`]: an asymmetric Bouc-Wen model, integrated in closed form.
 //!
 //! A further model (e.g. an MPIM read from a model file, for tests) plugs in as one more
 //! variant of [`Hysteresis`] implementing [`RateIndependentHysteresis`], one more
-//! [`HysteresisModel`](crate::HysteresisModel) value and one more arm in
+//! [`HysteresisModel`] value and one more arm in
 //! [`Hysteresis::from_config`].
 
 mod bouc_wen;
