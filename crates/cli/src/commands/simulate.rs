@@ -1,12 +1,190 @@
-//! `hystcomp simulate` (not implemented yet).
+//! `hystcomp simulate`: drive the simulated piezo stage with a command-voltage record.
+
+use std::path::PathBuf;
+
+use hystcomp_io::data::{self, Column, DataError, ReadOptions};
+use hystcomp_stage::{Stage, StageConfig, StageResponse};
 
 use crate::{CliError, Context};
 
 /// Arguments of `hystcomp simulate`.
 #[derive(Debug, clap::Args)]
-pub struct Args {}
+pub struct Args {
+    /// Stage file (TOML, see crates/stage/stages/default.toml); the built-in default stage
+    /// when absent.
+    #[arg(long, value_name = "STAGE.toml")]
+    pub stage: Option<PathBuf>,
+
+    /// Input record (CSV, other delimited text or .mat) with a time column (s) and a command
+    /// voltage column (V, the controller's DAC output, nominally 0..10 V). The time step must
+    /// be the stage's sample period.
+    #[arg(long, value_name = "VOLTS.csv")]
+    pub input: PathBuf,
+
+    /// Output CSV, one row per input sample: time_s, command_v, amplifier_v,
+    /// true_position_um, measured_position_um (positions at the end of each sample period).
+    #[arg(short = 'o', long = "output", value_name = "OUT.csv")]
+    pub output: PathBuf,
+
+    /// Time column of the input: a header name or a number counted from 1.
+    #[arg(long, value_name = "COLUMN", default_value = "1")]
+    pub time_column: Column,
+
+    /// Command voltage column of the input: a header name or a number counted from 1.
+    #[arg(long, value_name = "COLUMN", default_value = "2")]
+    pub voltage_column: Column,
+
+    /// Seed of the sensor noise (the same seed gives the same output).
+    #[arg(long, default_value_t = 0)]
+    pub seed: u64,
+}
+
+/// Largest relative difference allowed between the input's time step and the stage's period.
+const STEP_TOLERANCE: f64 = 1e-6;
+
+/// Output columns, in order.
+const HEADER: [&str; 5] = [
+    "time_s",
+    "command_v",
+    "amplifier_v",
+    "true_position_um",
+    "measured_position_um",
+];
+
+fn data_error(error: DataError) -> CliError {
+    if error.is_output() {
+        CliError::output(error.to_string())
+    } else {
+        CliError::input(error.to_string())
+    }
+}
+
+/// Refuses an input whose time step is not the stage's sample period.
+fn check_time_step(time: &[f64], config: &StageConfig, stage_name: &str) -> Result<(), CliError> {
+    let period = 1.0 / config.sample_rate_hz;
+    for (i, pair) in time.windows(2).enumerate() {
+        let step = pair[1] - pair[0];
+        if ((step - period) / period).abs() > STEP_TOLERANCE {
+            return Err(CliError::input(format!(
+                "the input's time step between rows {} and {} is {step} s, but {stage_name} \
+                 samples at sample_rate_hz = {} Hz (a step of {period} s); give a record \
+                 sampled at that rate, or set sample_rate_hz = {} in a stage file",
+                i + 1,
+                i + 2,
+                config.sample_rate_hz,
+                1.0 / step,
+            )));
+        }
+    }
+    Ok(())
+}
+
+fn min_max(values: &[f64]) -> serde_json::Value {
+    let lo = values.iter().copied().fold(f64::INFINITY, f64::min);
+    let hi = values.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+    serde_json::json!({ "min": lo, "max": hi })
+}
+
+fn summary(
+    args: &Args,
+    config: &StageConfig,
+    time: &[f64],
+    response: &StageResponse,
+) -> serde_json::Value {
+    let columns: [(&str, &[f64]); 5] = [
+        (HEADER[0], time),
+        (HEADER[1], &response.command_v),
+        (HEADER[2], &response.amplifier_v),
+        (HEADER[3], &response.true_position_um),
+        (HEADER[4], &response.measured_position_um),
+    ];
+    let ranges: serde_json::Map<String, serde_json::Value> = columns
+        .iter()
+        .map(|(name, values)| (name.to_string(), min_max(values)))
+        .collect();
+    serde_json::json!({
+        "input": args.input.display().to_string(),
+        "output": args.output.display().to_string(),
+        "stage": args.stage.as_ref().map(|p| p.display().to_string()),
+        "hysteresis_model": config.hysteresis.model,
+        "sample_rate_hz": config.sample_rate_hz,
+        "seed": args.seed,
+        "samples": time.len(),
+        "duration_s": time.len() as f64 / config.sample_rate_hz,
+        "columns": ranges,
+        "clamped": {
+            "dac": response.clamps.dac_clamped,
+            "amplifier": response.clamps.amplifier_clamped,
+        },
+    })
+}
 
 /// Runs `hystcomp simulate`.
-pub fn run(_args: &Args, _ctx: Context) -> Result<(), CliError> {
-    Err(CliError::input("`hystcomp simulate` is not implemented yet"))
+pub fn run(args: &Args, ctx: Context) -> Result<(), CliError> {
+    let (config, stage_name) = match &args.stage {
+        Some(path) => (
+            StageConfig::from_toml_file(path).map_err(|e| match e {
+                hystcomp_stage::StageError::Io { .. } => CliError::input(e.to_string()),
+                _ => CliError::input(e.to_string()).context(path.display()),
+            })?,
+            format!("the stage of {}", path.display()),
+        ),
+        None => (StageConfig::default(), "the built-in stage".to_string()),
+    };
+
+    let record = data::read_columns(
+        &args.input,
+        &[args.time_column.clone(), args.voltage_column.clone()],
+        &ReadOptions::default(),
+    )
+    .map_err(data_error)?;
+    let time = &record.values[0];
+    let command_v = &record.values[1];
+    data::check_min_samples(2, time.len(), "a simulation")
+        .map_err(|e| data_error(e).context(args.input.display()))?;
+    data::check_time_increasing(time).map_err(|e| data_error(e).context(args.input.display()))?;
+    check_time_step(time, &config, &stage_name).map_err(|e| e.context(args.input.display()))?;
+
+    let mut stage = Stage::new(&config, args.seed)?;
+    let response = stage.run(command_v);
+
+    data::write_csv(
+        &args.output,
+        &HEADER,
+        &[
+            time,
+            &response.command_v,
+            &response.amplifier_v,
+            &response.true_position_um,
+            &response.measured_position_um,
+        ],
+    )
+    .map_err(data_error)?;
+
+    if ctx.json {
+        let document = summary(args, &config, time, &response);
+        println!(
+            "{}",
+            serde_json::to_string_pretty(&document).map_err(|e| CliError::output(e.to_string()))?
+        );
+    } else {
+        let clamped = response.clamps.dac_clamped + response.clamps.amplifier_clamped;
+        println!(
+            "simulated {} samples ({} s) on {stage_name}; wrote {}",
+            time.len(),
+            time.len() as f64 / config.sample_rate_hz,
+            args.output.display()
+        );
+        if clamped > 0 {
+            eprintln!(
+                "warning: {} command samples were outside the DAC span and {} outside the \
+                 amplifier's {}..{} V rails once amplified; they were clamped",
+                response.clamps.dac_clamped,
+                response.clamps.amplifier_clamped,
+                config.amplifier.output_min_v,
+                config.amplifier.output_max_v
+            );
+        }
+    }
+    Ok(())
 }

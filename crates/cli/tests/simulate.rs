@@ -1,0 +1,300 @@
+//! `hystcomp simulate` end to end: the built binary on files in a temporary folder.
+
+use std::path::Path;
+use std::process::{Command, Output};
+
+fn hystcomp(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_hystcomp"))
+        .args(args)
+        .output()
+        .expect("the hystcomp binary runs")
+}
+
+fn stderr(output: &Output) -> String {
+    String::from_utf8_lossy(&output.stderr).into_owned()
+}
+
+/// A command record at `rate_hz`: a slow sine around 5 V, `n` samples, with a header.
+fn write_input(path: &Path, rate_hz: f64, n: usize) {
+    let mut text = String::from("time_s,volts\n");
+    for k in 0..n {
+        let t = k as f64 / rate_hz;
+        let v = 5.0 + 4.0 * (2.0 * std::f64::consts::PI * 2.0 * t).sin();
+        text.push_str(&format!("{t},{v}\n"));
+    }
+    std::fs::write(path, text).unwrap();
+}
+
+fn read_output(path: &Path) -> (Vec<String>, Vec<Vec<f64>>) {
+    let text = std::fs::read_to_string(path).unwrap();
+    let mut lines = text.lines();
+    let header = lines
+        .next()
+        .unwrap()
+        .split(',')
+        .map(str::to_owned)
+        .collect();
+    let rows = lines
+        .map(|l| l.split(',').map(|x| x.parse().unwrap()).collect())
+        .collect();
+    (header, rows)
+}
+
+#[test]
+fn good_run_writes_every_column_and_a_json_summary() {
+    let dir = tempfile::tempdir().unwrap();
+    let input = dir.path().join("volts.csv");
+    let output = dir.path().join("out.csv");
+    write_input(&input, 10_000.0, 5_000);
+    let out = hystcomp(&[
+        "--json",
+        "simulate",
+        "--input",
+        input.to_str().unwrap(),
+        "-o",
+        output.to_str().unwrap(),
+        "--seed",
+        "3",
+    ]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let (header, rows) = read_output(&output);
+    assert_eq!(
+        header,
+        [
+            "time_s",
+            "command_v",
+            "amplifier_v",
+            "true_position_um",
+            "measured_position_um"
+        ]
+    );
+    assert_eq!(rows.len(), 5_000);
+    // The amplifier multiplies by 15 (after its lag) and the stage moves tens of micrometres.
+    let top = rows.iter().map(|r| r[2]).fold(0.0, f64::max);
+    assert!((top - 135.0).abs() < 2.0, "{top}");
+    let far = rows.iter().map(|r| r[3]).fold(0.0, f64::max);
+    assert!(far > 40.0 && far < 80.0, "{far}");
+    for r in &rows {
+        assert!(
+            (r[4] - r[3]).abs() < 0.05,
+            "measured {} vs true {}",
+            r[4],
+            r[3]
+        );
+    }
+
+    let summary: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert_eq!(summary["samples"], 5_000);
+    assert_eq!(summary["seed"], 3);
+    assert_eq!(summary["hysteresis_model"], "preisach");
+    assert!((summary["duration_s"].as_f64().unwrap() - 0.5).abs() < 1e-12);
+    assert_eq!(summary["clamped"]["dac"], 0);
+    assert_eq!(summary["clamped"]["amplifier"], 0);
+    let max_true = summary["columns"]["true_position_um"]["max"]
+        .as_f64()
+        .unwrap();
+    assert_eq!(max_true, far);
+
+    // Same seed, same file; another seed, other noise.
+    let again = dir.path().join("again.csv");
+    let other = dir.path().join("other.csv");
+    for (path, seed) in [(&again, "3"), (&other, "4")] {
+        let out = hystcomp(&[
+            "simulate",
+            "--input",
+            input.to_str().unwrap(),
+            "-o",
+            path.to_str().unwrap(),
+            "--seed",
+            seed,
+        ]);
+        assert!(out.status.success(), "{}", stderr(&out));
+    }
+    assert_eq!(
+        std::fs::read(&output).unwrap(),
+        std::fs::read(&again).unwrap()
+    );
+    assert_ne!(
+        std::fs::read(&output).unwrap(),
+        std::fs::read(&other).unwrap()
+    );
+}
+
+#[test]
+fn stage_file_and_named_columns_are_used() {
+    let dir = tempfile::tempdir().unwrap();
+    let input = dir.path().join("volts.csv");
+    let output = dir.path().join("out.csv");
+    let stage = dir.path().join("stage.toml");
+    // Columns swapped, a 5 kHz stage, and clamped commands counted: 10 beyond the DAC's
+    // +-10 V span, 5 within it but below the amplifier's 0 V rail once amplified.
+    let mut text = String::from("volts;time\n");
+    for k in 0..1000 {
+        let volts = match k {
+            0..10 => 12.0,
+            10..15 => -1.0,
+            _ => 2.0,
+        };
+        text.push_str(&format!("{volts};{}\n", k as f64 / 5e3));
+    }
+    std::fs::write(&input, text).unwrap();
+    std::fs::write(
+        &stage,
+        "sample_rate_hz = 5000.0\n[hysteresis]\nmodel = \"bouc-wen\"\n",
+    )
+    .unwrap();
+    let out = hystcomp(&[
+        "--json",
+        "simulate",
+        "--stage",
+        stage.to_str().unwrap(),
+        "--input",
+        input.to_str().unwrap(),
+        "--time-column",
+        "time",
+        "--voltage-column",
+        "1",
+        "-o",
+        output.to_str().unwrap(),
+    ]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let summary: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert_eq!(summary["hysteresis_model"], "bouc-wen");
+    assert_eq!(summary["sample_rate_hz"], 5000.0);
+    assert_eq!(summary["clamped"]["dac"], 10);
+    assert_eq!(summary["clamped"]["amplifier"], 5);
+}
+
+fn assert_fails(args: &[&str], fragments: &[&str]) {
+    let out = hystcomp(args);
+    assert!(!out.status.success(), "succeeded: {args:?}");
+    assert_ne!(out.status.code(), Some(0));
+    let message = stderr(&out);
+    for fragment in fragments {
+        assert!(message.contains(fragment), "{fragment:?} not in: {message}");
+    }
+}
+
+#[test]
+fn bad_stage_file_is_refused_with_the_field_named() {
+    let dir = tempfile::tempdir().unwrap();
+    let input = dir.path().join("volts.csv");
+    write_input(&input, 10_000.0, 100);
+    let output = dir.path().join("out.csv");
+    for (content, fragments) in [
+        (
+            "[mechanics]\ndamping_ratio = -0.05\n",
+            &["stage.toml", "mechanics.damping_ratio must be"][..],
+        ),
+        ("[amplifier]\nbandwith_hz = 2000.0\n", &["bandwith_hz"][..]),
+        (
+            "[amplifier]\noutput_min_v = 150.0\noutput_max_v = 0.0\n",
+            &["amplifier.output_min_v..amplifier.output_max_v"][..],
+        ),
+    ] {
+        let stage = dir.path().join("stage.toml");
+        std::fs::write(&stage, content).unwrap();
+        assert_fails(
+            &[
+                "simulate",
+                "--stage",
+                stage.to_str().unwrap(),
+                "--input",
+                input.to_str().unwrap(),
+                "-o",
+                output.to_str().unwrap(),
+            ],
+            fragments,
+        );
+        assert!(!output.exists());
+    }
+}
+
+#[test]
+fn missing_input_is_refused_with_its_path() {
+    let dir = tempfile::tempdir().unwrap();
+    let input = dir.path().join("nowhere.csv");
+    let output = dir.path().join("out.csv");
+    assert_fails(
+        &[
+            "simulate",
+            "--input",
+            input.to_str().unwrap(),
+            "-o",
+            output.to_str().unwrap(),
+        ],
+        &["nowhere.csv"],
+    );
+    assert!(!output.exists());
+}
+
+#[test]
+fn nan_in_the_input_is_refused_with_its_row() {
+    let dir = tempfile::tempdir().unwrap();
+    let input = dir.path().join("volts.csv");
+    let output = dir.path().join("out.csv");
+    std::fs::write(&input, "time_s,volts\n0,1\n0.0001,NaN\n0.0002,1\n").unwrap();
+    assert_fails(
+        &[
+            "simulate",
+            "--input",
+            input.to_str().unwrap(),
+            "-o",
+            output.to_str().unwrap(),
+        ],
+        &["volts.csv", "row 2", "volts"],
+    );
+    assert!(!output.exists());
+}
+
+#[test]
+fn wrong_column_is_refused_with_the_column_named() {
+    let dir = tempfile::tempdir().unwrap();
+    let input = dir.path().join("volts.csv");
+    let output = dir.path().join("out.csv");
+    write_input(&input, 10_000.0, 100);
+    assert_fails(
+        &[
+            "simulate",
+            "--input",
+            input.to_str().unwrap(),
+            "--voltage-column",
+            "command",
+            "-o",
+            output.to_str().unwrap(),
+        ],
+        &["command"],
+    );
+    assert_fails(
+        &[
+            "simulate",
+            "--input",
+            input.to_str().unwrap(),
+            "--voltage-column",
+            "7",
+            "-o",
+            output.to_str().unwrap(),
+        ],
+        &["7"],
+    );
+    assert!(!output.exists());
+}
+
+#[test]
+fn time_step_other_than_the_stage_period_is_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let input = dir.path().join("volts.csv");
+    let output = dir.path().join("out.csv");
+    write_input(&input, 1_000.0, 100);
+    assert_fails(
+        &[
+            "simulate",
+            "--input",
+            input.to_str().unwrap(),
+            "-o",
+            output.to_str().unwrap(),
+        ],
+        &["time step", "10000 Hz", "sample_rate_hz = 1000"],
+    );
+    assert!(!output.exists());
+}
