@@ -1002,9 +1002,9 @@ fn parameter_table(
         let _ = write!(
             h,
             "<td colspan=\"3\">input 1 = {} {}<br>output 1 = {} {}</td>",
-            esc(&num(m.input_scale)),
+            esc(&param(m.input_scale)),
             esc(&m.input_unit),
-            esc(&num(m.output_scale)),
+            esc(&param(m.output_scale)),
             esc(&m.output_unit)
         );
     }
