@@ -16,7 +16,8 @@ use crate::error::StageError;
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct StageConfig {
-    /// Controller sample rate, Hz (default 10 kHz: the DS1103 loop rate used in the study).
+    /// Controller sample rate, Hz. Default 10 kHz: the loop rate of this project's study on the
+    /// DS1103 (the paper does not print its rate).
     pub sample_rate_hz: f64,
     /// The controller's DAC that writes the command voltage.
     pub dac: ConverterConfig,
