@@ -1,0 +1,335 @@
+//! Cross-validation: identify on one record, predict and replay the compensators on another.
+//!
+//! The **offline inverse replay** feeds the *measured* displacement of the test record to each
+//! compensator as its desired position `y_d` and compares the voltage it returns with the
+//! voltage that was actually applied. A perfect compensator for this device would return
+//! exactly the applied voltage, so the replay error tells, before touching hardware, how each
+//! compensator would do on the device the records come from.
+
+use hystcomp_core::{Compensator, Dihc, Ihc, OutputLimits, SolveMode, Wihc};
+use hystcomp_io::data::{check_finite, check_not_constant, check_same_length};
+use hystcomp_io::model_file::{Direction, ModelFile};
+use serde::{Deserialize, Serialize};
+
+use crate::identification::{auto_warmup, min_max};
+use crate::report::{ErrorStats, FitReport};
+use crate::{IdentifyError, IdentifyOptions, Observer, Warmup, identify_observed};
+
+/// One record: the drive voltage and the measured displacement, one pair per sample.
+#[derive(Debug, Clone, Copy)]
+pub struct Record<'a> {
+    /// Drive voltage, in the voltage unit of the options.
+    pub voltage: &'a [f64],
+    /// Measured displacement, in the displacement unit of the options.
+    pub displacement: &'a [f64],
+}
+
+impl Record<'_> {
+    fn check(&self) -> Result<(), IdentifyError> {
+        check_same_length(&[("voltage", self.voltage), ("displacement", self.displacement)])?;
+        check_finite("voltage", self.voltage)?;
+        check_finite("displacement", self.displacement)?;
+        check_not_constant("voltage", self.voltage)?;
+        check_not_constant("displacement", self.displacement)?;
+        Ok(())
+    }
+}
+
+/// Options of [`crossval`].
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, Default)]
+pub struct CrossvalOptions {
+    /// How both models are identified on the training record (the direction is ignored: a
+    /// plant model and an inverse model are identified).
+    pub identify: IdentifyOptions,
+    /// Samples at the start of the test record left out of the errors (all compensators and
+    /// the forward model start from their reset state at the first test sample). `Auto` ends
+    /// at the first sample whose voltage is within 5 % of the test record's voltage range from
+    /// its minimum (see [`Warmup::Auto`]).
+    pub test_warmup: Warmup,
+}
+
+/// The replay of one compensator over the test record.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Replay {
+    /// `ihc`, `ihc-delayed`, `wihc`, `wihc-delayed` or `dihc`.
+    pub compensator: String,
+    /// Returned minus applied voltage over the evaluated span, in % of the test record's
+    /// voltage range there. `None` when the compensator could not be built.
+    pub error: Option<ErrorStats>,
+    /// Samples of the evaluated span whose desired position could not be reached within the
+    /// output limits (or lay outside a DIHC model's input range).
+    pub saturated: u64,
+    /// Why the compensator could not be built, if it could not.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub failure: Option<String>,
+}
+
+/// What [`crossval`] found.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct CrossvalReport {
+    /// The plant model's fit on the training record.
+    pub plant: FitReport,
+    /// The inverse model's fit on the training record.
+    pub inverse: FitReport,
+    /// The validation on the test record.
+    pub test: Validation,
+}
+
+/// The models' errors on a test record.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Validation {
+    /// Samples in the test record.
+    pub samples: usize,
+    /// Samples at its start left out of the errors.
+    pub warmup: usize,
+    /// The output limits of the compensators: the training record's voltage range (physical).
+    pub voltage_limits: [f64; 2],
+    /// Test samples whose voltage lies outside the plant model's input range (the model
+    /// extrapolates there).
+    pub voltage_outside_model_range: usize,
+    /// Test samples whose displacement lies outside the inverse model's input range (DIHC
+    /// clamps them).
+    pub displacement_outside_model_range: usize,
+    /// The plant model's prediction of the measured displacement from the applied voltage, in
+    /// % of the test record's displacement range over the evaluated span.
+    pub forward: ErrorStats,
+    /// The offline inverse replay of each compensator.
+    pub replay: Vec<Replay>,
+}
+
+/// A cross-validation: the report and both identified models.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct CrossValidation {
+    /// The report.
+    pub report: CrossvalReport,
+    /// The plant model (for IHC and WIHC).
+    pub plant: ModelFile,
+    /// The inverse model (for DIHC).
+    pub inverse: ModelFile,
+}
+
+/// Identifies a plant model and an inverse model on `train` and validates both on `test`
+/// (see [`validate_models`]). `observer` sees the solver's progress of both identifications.
+pub fn crossval(
+    train: Record<'_>,
+    test: Record<'_>,
+    options: &CrossvalOptions,
+    observer: &mut dyn Observer,
+) -> Result<CrossValidation, IdentifyError> {
+    train.check()?;
+    test.check()?;
+    let mut plant_options = options.identify.clone();
+    plant_options.direction = Direction::Plant;
+    let mut inverse_options = options.identify.clone();
+    inverse_options.direction = Direction::Inverse;
+    let plant = identify_observed(train.voltage, train.displacement, &plant_options, observer)?;
+    let inverse =
+        identify_observed(train.voltage, train.displacement, &inverse_options, observer)?;
+    let (v_min, v_max) = min_max(train.voltage);
+    let test_report = validate_models(
+        &plant.model,
+        &inverse.model,
+        [v_min, v_max],
+        test,
+        options.test_warmup,
+    )?;
+    Ok(CrossValidation {
+        report: CrossvalReport {
+            plant: plant.report,
+            inverse: inverse.report,
+            test: test_report,
+        },
+        plant: plant.model,
+        inverse: inverse.model,
+    })
+}
+
+/// Validates a plant model and an inverse model on a record:
+///
+/// - (a) the plant model's prediction of the measured displacement from the applied voltage;
+/// - (b) the offline inverse replay (see the [module documentation](self)) of IHC and WIHC
+///   (exact and delayed, from the plant model) and DIHC (from the inverse model), with output
+///   limits `voltage_limits` (physical; the training record's voltage range).
+///
+/// Everything starts from its reset state at the first sample; errors are taken after the
+/// warm-up.
+pub fn validate_models(
+    plant: &ModelFile,
+    inverse: &ModelFile,
+    voltage_limits: [f64; 2],
+    test: Record<'_>,
+    warmup: Warmup,
+) -> Result<Validation, IdentifyError> {
+    test.check()?;
+    let wrong = |what: &str, file: &ModelFile, expected: Direction| {
+        (file.direction != expected).then(|| IdentifyError::InvalidOption {
+            option: "model direction",
+            value: file.direction.to_string(),
+            reason: format!("the {what} model must have direction {expected}"),
+        })
+    };
+    if let Some(e) = wrong("plant", plant, Direction::Plant) {
+        return Err(e);
+    }
+    if let Some(e) = wrong("inverse", inverse, Direction::Inverse) {
+        return Err(e);
+    }
+    let samples = test.voltage.len();
+    let start = match warmup {
+        Warmup::Auto => auto_warmup(test.voltage),
+        Warmup::Samples(n) => n,
+    };
+    if start >= samples {
+        return Err(IdentifyError::InvalidOption {
+            option: "test warm-up",
+            value: start.to_string(),
+            reason: format!("the test record has only {samples} samples; give a shorter warm-up"),
+        });
+    }
+    let span = start..samples;
+    let voltage_range = range_of(&test.voltage[span.clone()]);
+    let displacement_range = range_of(&test.displacement[span.clone()]);
+
+    // (a) Forward prediction.
+    let mut model = plant.model()?;
+    let predicted: Vec<f64> = test
+        .voltage
+        .iter()
+        .map(|&v| plant.output_to_physical(model.step(plant.normalise_input(v))))
+        .collect();
+    let forward = ErrorStats::new(
+        &predicted[span.clone()],
+        &test.displacement[span.clone()],
+        displacement_range,
+    )
+    .expect("the evaluated span is not empty");
+    let [lo, hi] = plant.input_range;
+    let voltage_outside_model_range = test
+        .voltage
+        .iter()
+        .map(|&v| plant.normalise_input(v))
+        .filter(|x| *x < lo || *x > hi)
+        .count();
+    let [ilo, ihi] = inverse.input_range;
+    let displacement_outside_model_range = test
+        .displacement
+        .iter()
+        .map(|&y| inverse.normalise_input(y))
+        .filter(|x| *x < ilo || *x > ihi)
+        .count();
+
+    // (b) Offline inverse replay.
+    let plant_model = plant.model()?;
+    let inverse_model = inverse.model()?;
+    let plant_limits = OutputLimits::new(
+        plant.normalise_input(voltage_limits[0]),
+        plant.normalise_input(voltage_limits[1]),
+    )?;
+    let dihc_limits = OutputLimits::new(
+        inverse.output.normalise(voltage_limits[0]),
+        inverse.output.normalise(voltage_limits[1]),
+    )?;
+    let desired_plant: Vec<f64> = test
+        .displacement
+        .iter()
+        .map(|&y| plant.output.normalise(y))
+        .collect();
+    let desired_inverse: Vec<f64> = test
+        .displacement
+        .iter()
+        .map(|&y| inverse.normalise_input(y))
+        .collect();
+
+    type Built = Result<Box<dyn Compensator<f64>>, hystcomp_core::CoreError>;
+    let candidates: [(&str, Built, &ModelFile, &[f64]); 5] = [
+        (
+            "ihc",
+            Ihc::<f64, Vec<f64>>::new(&plant_model, plant_limits, SolveMode::Exact)
+                .map(|c| Box::new(c) as Box<dyn Compensator<f64>>),
+            plant,
+            &desired_plant,
+        ),
+        (
+            "ihc-delayed",
+            Ihc::<f64, Vec<f64>>::new(&plant_model, plant_limits, SolveMode::Delayed)
+                .map(|c| Box::new(c) as Box<dyn Compensator<f64>>),
+            plant,
+            &desired_plant,
+        ),
+        (
+            "wihc",
+            Wihc::<f64, Vec<f64>>::new(&plant_model, plant_limits, SolveMode::Exact)
+                .map(|c| Box::new(c) as Box<dyn Compensator<f64>>),
+            plant,
+            &desired_plant,
+        ),
+        (
+            "wihc-delayed",
+            Wihc::<f64, Vec<f64>>::new(&plant_model, plant_limits, SolveMode::Delayed)
+                .map(|c| Box::new(c) as Box<dyn Compensator<f64>>),
+            plant,
+            &desired_plant,
+        ),
+        (
+            "dihc",
+            Dihc::<f64, Vec<f64>>::new(&inverse_model, ilo, ihi, dihc_limits)
+                .map(|c| Box::new(c) as Box<dyn Compensator<f64>>),
+            inverse,
+            &desired_inverse,
+        ),
+    ];
+    let mut replay = Vec::with_capacity(candidates.len());
+    for (name, built, file, desired) in candidates {
+        let mut compensator = match built {
+            Ok(c) => c,
+            Err(e) => {
+                replay.push(Replay {
+                    compensator: name.to_owned(),
+                    error: None,
+                    saturated: 0,
+                    failure: Some(e.to_string()),
+                });
+                continue;
+            }
+        };
+        // The voltage a compensator returns is its model's input (plant) or output (inverse).
+        let to_volts = |v: f64| match file.direction {
+            Direction::Plant => file.input.to_physical(v),
+            Direction::Inverse => file.output_to_physical(v),
+        };
+        let mut voltage = Vec::with_capacity(samples);
+        let mut saturated_before = 0;
+        for (k, &y_d) in desired.iter().enumerate() {
+            if k == start {
+                saturated_before = compensator.diagnostics().saturated;
+            }
+            voltage.push(to_volts(compensator.step(y_d)));
+        }
+        replay.push(Replay {
+            compensator: name.to_owned(),
+            error: ErrorStats::new(
+                &voltage[span.clone()],
+                &test.voltage[span.clone()],
+                voltage_range,
+            ),
+            saturated: compensator.diagnostics().saturated - saturated_before,
+            failure: None,
+        });
+    }
+
+    Ok(Validation {
+        samples,
+        warmup: start,
+        voltage_limits,
+        voltage_outside_model_range,
+        displacement_outside_model_range,
+        forward,
+        replay,
+    })
+}
+
+/// `max - min`, or 1 for a constant span (so that percentages stay finite).
+fn range_of(values: &[f64]) -> f64 {
+    let (lo, hi) = min_max(values);
+    if hi > lo { hi - lo } else { 1.0 }
+}

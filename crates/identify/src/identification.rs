@@ -1,0 +1,267 @@
+//! From (voltage, displacement) samples to a model file and a fit report.
+
+use std::time::Instant;
+
+use hystcomp_core::{Compensator, Ihc, Mpim, OutputLimits, SolveMode, Wihc};
+use hystcomp_io::data::{check_finite, check_min_samples, check_not_constant, check_same_length};
+use hystcomp_io::model_file::{Direction, ModelFile, Scale};
+use serde::{Deserialize, Serialize};
+
+use crate::options::{AUTO_WARMUP_LEVEL, SAMPLES_PER_PARAMETER};
+use crate::report::{ErrorStats, FitReport, SampleCounts, SignalRange};
+use crate::{
+    FitProblem, IdentifyError, IdentifyOptions, LeastSquares, Method, NoObserver, Observer,
+    OutputOffset, Parameters, ParticleSwarm, ProblemData, Solver, Warmup,
+};
+
+/// An identified model: the model file (physical scales and normalised parameters) and how
+/// well it fits.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Identification {
+    /// The model file, with the report in its `identification` field.
+    pub model: ModelFile,
+    /// The fit report.
+    pub report: FitReport,
+    /// The normalised parameters (with the fitted constant `c`, already moved into the model
+    /// file's `output.offset`).
+    pub parameters: Parameters,
+}
+
+/// Identifies an MPIM (eq. (4)) from a record of drive voltages and measured displacements
+/// (same length, one pair per sample). See [`identify_observed`].
+pub fn identify(
+    voltage: &[f64],
+    displacement: &[f64],
+    options: &IdentifyOptions,
+) -> Result<Identification, IdentifyError> {
+    identify_observed(voltage, displacement, options, &mut NoObserver)
+}
+
+/// Identifies an MPIM (eq. (4)) from a record, telling `observer` about the solver's progress.
+///
+/// 1. The model input and output are chosen by [`IdentifyOptions::direction`]: voltage to
+///    displacement for a plant model, displacement to voltage for an inverse (DIHC) model.
+/// 2. Normalisation: `x = (input - min) / (max - min)` over the record, so that the thresholds
+///    `(i - 1)/n` are fractions of the input range (eq. (11)); output
+///    `(output - offset) / (max - min)` with the offset of [`OutputOffset`].
+/// 3. The operators run over the whole record from zero memory (eq. (1)); the warm-up and the
+///    hold-out are excluded from the fit.
+/// 4. The chosen solver minimises the RMS error under the invertibility constraints of
+///    [`FitProblem`]; the model is then checked by the core (`check_invertible` on `[0, 1]`,
+///    and for a plant model the IHC of eq. (7) and the delayed WIHC of eq. (9) are built).
+///
+/// Refuses samples that are NaN or infinite, of different lengths, constant, or too few for
+/// the model ([`IdentifyError::Data`], with the number needed), and invalid options.
+pub fn identify_observed(
+    voltage: &[f64],
+    displacement: &[f64],
+    options: &IdentifyOptions,
+    observer: &mut dyn Observer,
+) -> Result<Identification, IdentifyError> {
+    let started = Instant::now();
+    options.validate()?;
+    check_same_length(&[("voltage", voltage), ("displacement", displacement)])?;
+    check_finite("voltage", voltage)?;
+    check_finite("displacement", displacement)?;
+    check_not_constant("voltage", voltage)?;
+    check_not_constant("displacement", displacement)?;
+
+    let (input, output, input_quantity, output_quantity, input_unit, output_unit) =
+        match options.direction {
+            Direction::Plant => (
+                voltage,
+                displacement,
+                "voltage",
+                "displacement",
+                &options.voltage_unit,
+                &options.displacement_unit,
+            ),
+            Direction::Inverse => (
+                displacement,
+                voltage,
+                "displacement",
+                "voltage",
+                &options.displacement_unit,
+                &options.voltage_unit,
+            ),
+        };
+    let (x_min, x_max) = min_max(input);
+    let (y_min, y_max) = min_max(output);
+    let x_scale = x_max - x_min;
+    let y_scale = y_max - y_min;
+    let y_reference = match options.offset {
+        OutputOffset::Fit | OutputOffset::None => y_min,
+        OutputOffset::Value(v) => v,
+    };
+    let x: Vec<f64> = input.iter().map(|v| (v - x_min) / x_scale).collect();
+    let y: Vec<f64> = output.iter().map(|v| (v - y_reference) / y_scale).collect();
+
+    let thresholds = options.thresholds.values()?;
+    let fit_offset = options.offset == OutputOffset::Fit;
+    let parameters_count = thresholds.len() + 2 - usize::from(thresholds[0] == 0.0)
+        + usize::from(fit_offset);
+    let total = x.len();
+    let warmup = match options.warmup {
+        Warmup::Auto => auto_warmup(voltage),
+        Warmup::Samples(n) => n.min(total),
+    };
+    let after_warmup = total - warmup;
+    let holdout = (options.holdout * after_warmup as f64).floor() as usize;
+    let fit_samples = after_warmup - holdout;
+    let needed = (SAMPLES_PER_PARAMETER * parameters_count).max(parameters_count + 1);
+    check_min_samples(
+        needed,
+        fit_samples,
+        &format!(
+            "identification of a model with {} play operator(s) ({parameters_count} parameters, \
+             {SAMPLES_PER_PARAMETER} samples each, after a warm-up of {warmup} and a hold-out of \
+             {holdout} of the {total} samples)",
+            thresholds.len()
+        ),
+    )?;
+    let fit = warmup..warmup + fit_samples;
+
+    let problem = FitProblem::new(
+        ProblemData {
+            input: &x,
+            output: &y,
+            fit: fit.clone(),
+        },
+        &thresholds,
+        options.direction,
+        fit_offset,
+        options.margin,
+    )?;
+    if !(problem.condition_number() <= options.max_condition) {
+        return Err(IdentifyError::IllConditioned {
+            condition: problem.condition_number(),
+            limit: options.max_condition,
+        });
+    }
+    let (solver_name, solution) = match &options.method {
+        Method::LeastSquares => {
+            let solver = LeastSquares;
+            (solver.name(), solver.solve(&problem, observer)?)
+        }
+        Method::ParticleSwarm(pso) => {
+            let solver = ParticleSwarm::new(pso.clone())?;
+            (solver.name(), solver.solve(&problem, observer)?)
+        }
+    };
+    let parameters = problem.parameters(&solution.theta);
+
+    // The core's checks: the model must be invertible on its input range, and a plant model
+    // must give every compensator of the paper.
+    let model = Mpim::<f64, Vec<f64>>::new(
+        &thresholds,
+        &parameters.weights,
+        parameters.a1,
+        parameters.a2,
+    )?;
+    let slope = model.check_invertible(0.0, 1.0)?;
+    if options.direction == Direction::Plant {
+        let limits = OutputLimits::new(0.0, 1.0)?;
+        for mode in [SolveMode::Exact, SolveMode::Delayed] {
+            Ihc::<f64, Vec<f64>>::new(&model, limits, mode)?.reset();
+            Wihc::<f64, Vec<f64>>::new(&model, limits, mode)?.reset();
+        }
+    }
+
+    // Errors of the model itself (the core's MPIM over the whole record), physical units.
+    let output_offset = y_reference + parameters.offset * y_scale;
+    let mut run = model.clone();
+    let predicted: Vec<f64> = x
+        .iter()
+        .map(|&v| output_offset + y_scale * run.step(v))
+        .collect();
+    let fit_stats = ErrorStats::new(&predicted[fit.clone()], &output[fit.clone()], y_scale)
+        .expect("the fitting span is not empty");
+    let holdout_stats = ErrorStats::new(&predicted[fit.end..], &output[fit.end..], y_scale);
+
+    let input_scale = Scale {
+        quantity: input_quantity.to_owned(),
+        unit: input_unit.clone(),
+        offset: x_min,
+        scale: x_scale,
+    };
+    let output_scale = Scale {
+        quantity: output_quantity.to_owned(),
+        unit: output_unit.clone(),
+        offset: output_offset,
+        scale: y_scale,
+    };
+    let report = FitReport {
+        direction: options.direction,
+        solver: solver_name.to_owned(),
+        detail: solution.detail.clone(),
+        thresholds: thresholds.clone(),
+        samples: SampleCounts {
+            total,
+            warmup,
+            fit: fit_samples,
+            holdout,
+        },
+        input: SignalRange {
+            quantity: input_quantity.to_owned(),
+            unit: input_unit.clone(),
+            min: x_min,
+            max: x_max,
+        },
+        output: SignalRange {
+            quantity: output_quantity.to_owned(),
+            unit: output_unit.clone(),
+            min: y_min,
+            max: y_max,
+        },
+        offset_mode: options.offset,
+        output_offset,
+        fit: fit_stats,
+        holdout: holdout_stats,
+        condition_number: problem.condition_number(),
+        constraints: problem.constraints().len(),
+        active_constraints: solution.active_constraints,
+        margin: options.margin,
+        min_branch_slope: slope.slope,
+        pso: match &options.method {
+            Method::ParticleSwarm(pso) => Some(pso.clone()),
+            Method::LeastSquares => None,
+        },
+        elapsed_s: started.elapsed().as_secs_f64(),
+    };
+    let mut file =
+        ModelFile::from_model(options.direction, input_scale, output_scale, [0.0, 1.0], &model)?;
+    file.description = Some(format!(
+        "MPIM ({}) identified by hystcomp ({}) from {} samples: {} {} -> {} {}",
+        options.direction,
+        solver_name,
+        total,
+        input_quantity,
+        input_unit,
+        output_quantity,
+        output_unit
+    ));
+    file.identification = serde_json::to_value(&report).ok();
+    Ok(Identification {
+        model: file,
+        report,
+        parameters,
+    })
+}
+
+/// The first sample whose value is within [`AUTO_WARMUP_LEVEL`] of the range from the minimum.
+pub(crate) fn auto_warmup(voltage: &[f64]) -> usize {
+    let (lo, hi) = min_max(voltage);
+    voltage
+        .iter()
+        .position(|&v| v - lo <= AUTO_WARMUP_LEVEL * (hi - lo))
+        .unwrap_or(0)
+}
+
+/// Smallest and largest value (the samples are finite and not empty).
+pub(crate) fn min_max(values: &[f64]) -> (f64, f64) {
+    values
+        .iter()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), &v| {
+            (lo.min(v), hi.max(v))
+        })
+}

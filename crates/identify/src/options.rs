@@ -1,0 +1,246 @@
+//! What to identify and how: direction, solver, thresholds, warm-up, hold-out, output offset.
+
+use hystcomp_io::model_file::Direction;
+use serde::{Deserialize, Serialize};
+
+use crate::IdentifyError;
+use crate::pso::PsoOptions;
+
+/// The default number of play operators, as in the paper (`n = 10`, section 4.2).
+pub const DEFAULT_OPERATORS: usize = 10;
+
+/// The default smallest branch slope the identified model must keep, in normalised units
+/// (output range per input range). See [`IdentifyOptions::margin`].
+pub const DEFAULT_MARGIN: f64 = 1e-3;
+
+/// The default largest condition number of the column-scaled regressor matrix.
+pub const DEFAULT_MAX_CONDITION: f64 = 1e10;
+
+/// With [`Warmup::Auto`], the warm-up ends at the first sample whose voltage is at most this
+/// fraction of the record's voltage range above its minimum.
+pub const AUTO_WARMUP_LEVEL: f64 = 0.05;
+
+/// At least this many fitting samples per parameter of the model.
+pub const SAMPLES_PER_PARAMETER: usize = 3;
+
+/// How the play-operator thresholds `r_i` are chosen, in normalised input units (fractions of
+/// the input range).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Thresholds {
+    /// `r_i = (i - 1) / n`, `i = 1..n`: eq. (11) of the paper applied to the normalised input
+    /// `(x - x_min) / (x_max - x_min)`, so that it also holds for inputs that do not start at 0
+    /// or are bipolar.
+    Uniform(usize),
+    /// Thresholds given by the user: strictly increasing, in `[0, 1)`.
+    Given(Vec<f64>),
+}
+
+impl Thresholds {
+    /// The thresholds, checked: at least one, finite, strictly increasing, in `[0, 1)` (an
+    /// operator with `r >= 1` never moves on inputs within the range and cannot be identified).
+    pub fn values(&self) -> Result<Vec<f64>, IdentifyError> {
+        let invalid = |value: String, reason: &str| IdentifyError::InvalidOption {
+            option: "thresholds",
+            value,
+            reason: reason.to_owned(),
+        };
+        match self {
+            Thresholds::Uniform(0) => Err(IdentifyError::InvalidOption {
+                option: "number of play operators",
+                value: "0".to_owned(),
+                reason: "give at least 1 (the paper uses 10)".to_owned(),
+            }),
+            Thresholds::Uniform(n) => Ok((0..*n).map(|i| i as f64 / *n as f64).collect()),
+            Thresholds::Given(values) => {
+                let text = values
+                    .iter()
+                    .map(|v| v.to_string())
+                    .collect::<Vec<_>>()
+                    .join(",");
+                if values.is_empty() {
+                    return Err(invalid(text, "give at least one threshold"));
+                }
+                if values.iter().any(|r| !(r.is_finite() && (0.0..1.0).contains(r))) {
+                    return Err(invalid(
+                        text,
+                        "thresholds are fractions of the input range: each must lie in [0, 1)",
+                    ));
+                }
+                if values.windows(2).any(|w| w[1] <= w[0]) {
+                    return Err(invalid(
+                        text,
+                        "thresholds must increase strictly (two equal thresholds cannot be told apart)",
+                    ));
+                }
+                Ok(values.clone())
+            }
+        }
+    }
+}
+
+impl Default for Thresholds {
+    fn default() -> Self {
+        Thresholds::Uniform(DEFAULT_OPERATORS)
+    }
+}
+
+/// The samples at the start of the record excluded from the fit (the operators still run over
+/// them, from zero memory at the first sample, eq. (1)).
+///
+/// When a record starts mid-range, the real device's memory is unknown, but the model's is
+/// not: at the minimum input every one-sided play operator outputs 0 whatever its memory
+/// (eq. (2) with `x = 0` and memory `>= 0`), which is the reset state of eq. (1), and near the
+/// minimum its memory differs from that state by at most the distance to it. From the first
+/// visit near the minimum on, the model's state hardly depends on the unknown history;
+/// [`Warmup::Auto`] discards the samples before it.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
+#[serde(rename_all = "snake_case")]
+pub enum Warmup {
+    /// Up to the first sample whose voltage is within [`AUTO_WARMUP_LEVEL`] (5 %) of the
+    /// record's voltage range from its minimum (no warm-up when the record starts there). The
+    /// voltage decides in both directions: it drives the device's state, and it is clean,
+    /// while a displacement record may start with a transient or drift below its first minimum.
+    #[default]
+    Auto,
+    /// A fixed number of samples.
+    Samples(usize),
+}
+
+/// How the model output is related to the measured output column. The MPIM of eq. (4) has no
+/// constant term: from zero memory at normalised input 0 it outputs 0. A sensor offset must
+/// therefore be removed before the fit, or fitted.
+///
+/// In every case the output scale is `y_max - y_min` of the record, and the model file's
+/// `output.offset` is the physical output the model's normalised output 0 stands for.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, Default)]
+#[serde(rename_all = "snake_case")]
+pub enum OutputOffset {
+    /// A constant column is added to the regression; the fitted constant `c` moves into the
+    /// model file: `output.offset = y_min + c (y_max - y_min)`. Right for sensors with an
+    /// arbitrary zero (the default).
+    #[default]
+    Fit,
+    /// No constant: `output.offset = y_min`, i.e. the output is taken to be at its minimum when
+    /// the input is at its minimum (the paper's normalisation).
+    None,
+    /// No constant: `output.offset` is this physical value (e.g. `0` for a calibrated sensor
+    /// that reads 0 at 0 V).
+    Value(f64),
+}
+
+/// Which solver minimises the RMS model error.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, Default)]
+#[serde(rename_all = "snake_case")]
+pub enum Method {
+    /// Constrained linear least squares: the global optimum for the given thresholds
+    /// ([`crate::LeastSquares`]).
+    #[default]
+    LeastSquares,
+    /// Particle swarm optimisation as the paper uses ([`crate::ParticleSwarm`]).
+    ParticleSwarm(PsoOptions),
+}
+
+/// Everything [`crate::identify`] needs besides the samples.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct IdentifyOptions {
+    /// `Plant`: voltage in, displacement out (for IHC and WIHC). `Inverse`: displacement in,
+    /// voltage out (for DIHC, section 3.3).
+    pub direction: Direction,
+    /// The solver.
+    pub method: Method,
+    /// The play-operator thresholds.
+    pub thresholds: Thresholds,
+    /// Samples at the start excluded from the fit.
+    pub warmup: Warmup,
+    /// The fraction of the samples after the warm-up, at the end of the record, held out of
+    /// the fit and reported separately, in `[0, 1)`.
+    pub holdout: f64,
+    /// The output offset.
+    pub offset: OutputOffset,
+    /// The smallest branch slope the model must keep, in normalised units (> 0). Both signals
+    /// are normalised by their ranges, so the mean slope of the data is 1 and the default
+    /// [`DEFAULT_MARGIN`] is 0.1 % of it: it bounds the gain of the inverse (at most 1000 times
+    /// the mean) and leaves room for rounding in the core's check, while real piezo data have
+    /// minimum branch slopes of order 0.1 to 1, so it binds only where the data would
+    /// otherwise give a non-invertible model.
+    pub margin: f64,
+    /// The largest condition number of the column-scaled regressor matrix accepted.
+    pub max_condition: f64,
+    /// Unit of the voltage samples, written to the model file.
+    pub voltage_unit: String,
+    /// Unit of the displacement samples, written to the model file.
+    pub displacement_unit: String,
+}
+
+impl Default for IdentifyOptions {
+    fn default() -> Self {
+        IdentifyOptions {
+            direction: Direction::Plant,
+            method: Method::LeastSquares,
+            thresholds: Thresholds::default(),
+            warmup: Warmup::Auto,
+            holdout: 0.0,
+            offset: OutputOffset::Fit,
+            margin: DEFAULT_MARGIN,
+            max_condition: DEFAULT_MAX_CONDITION,
+            voltage_unit: "V".to_owned(),
+            displacement_unit: "um".to_owned(),
+        }
+    }
+}
+
+impl IdentifyOptions {
+    /// Checks the options that do not depend on the data.
+    pub fn validate(&self) -> Result<(), IdentifyError> {
+        self.thresholds.values()?;
+        if !(self.holdout.is_finite() && (0.0..1.0).contains(&self.holdout)) {
+            return Err(IdentifyError::InvalidOption {
+                option: "holdout",
+                value: self.holdout.to_string(),
+                reason: "the hold-out is a fraction of the samples in [0, 1), e.g. 0.2".to_owned(),
+            });
+        }
+        if !(self.margin.is_finite() && self.margin > 0.0 && self.margin < 1.0) {
+            return Err(IdentifyError::InvalidOption {
+                option: "margin",
+                value: self.margin.to_string(),
+                reason: "the slope margin is a small positive slope in normalised units, in \
+                         (0, 1); the default is 0.001"
+                    .to_owned(),
+            });
+        }
+        if !(self.max_condition.is_finite() && self.max_condition > 1.0) {
+            return Err(IdentifyError::InvalidOption {
+                option: "max-condition",
+                value: self.max_condition.to_string(),
+                reason: "give a condition number > 1, e.g. 1e10".to_owned(),
+            });
+        }
+        if let OutputOffset::Value(v) = self.offset {
+            if !v.is_finite() {
+                return Err(IdentifyError::InvalidOption {
+                    option: "offset",
+                    value: v.to_string(),
+                    reason: "give fit, none or a finite number".to_owned(),
+                });
+            }
+        }
+        for (option, unit) in [
+            ("voltage unit", &self.voltage_unit),
+            ("displacement unit", &self.displacement_unit),
+        ] {
+            if unit.trim().is_empty() {
+                return Err(IdentifyError::InvalidOption {
+                    option,
+                    value: unit.clone(),
+                    reason: "name the unit, e.g. V or um".to_owned(),
+                });
+            }
+        }
+        if let Method::ParticleSwarm(pso) = &self.method {
+            pso.validate()?;
+        }
+        Ok(())
+    }
+}

@@ -1,0 +1,505 @@
+//! The fitting problem: minimise the RMS model error of eq. (4) over the fitting span, under
+//! linear constraints that make the identified model invertible.
+//!
+//! # Linear in the parameters
+//! With the thresholds fixed, the MPIM output of eq. (4) (plus an optional constant `c`, the
+//! output offset) is linear in its parameters:
+//!
+//! `y(t) = a1 x^3(t) + a2 x(t) + sum_i b_i F_{r_i}[x](t) + c = phi(t) . theta`.
+//!
+//! The regressors `phi(t)` are computed once with the core's play operators (eqs. (1)-(2)),
+//! from zero memory at the first sample of the record. The columns are scaled to unit RMS and
+//! the augmented matrix `[Phi | y]` of the fitting span is reduced by one Householder QR to a
+//! small triangle `[R d; 0 rho]`, so that for every parameter vector
+//!
+//! `||Phi theta - y||^2 = ||R S^-1 theta - d||^2 + rho^2`
+//!
+//! and the RMS error costs `O(p^2)` to evaluate, whatever the number of samples. Least squares
+//! and the particle swarm both minimise this one function ([`FitProblem::cost`]).
+//!
+//! # A zero threshold
+//! When `r_1 = 0`, `F_0[x] = x` and the columns of `a2` and `b_1` are equal: only `a2 + b_1`
+//! is determined by the data. The problem therefore has one parameter `s = a2 + b_1` and the
+//! split is fixed by a rule:
+//!
+//! - plant models: `b_1 = -(3/2) a1 (x_lo^2 + x_hi^2)` over the input range (`b_1 = -1.5 a1` on
+//!   `[0, 1]`). The plant model, IHC and exact WIHC are the same for every split; the delayed
+//!   WIHC is not: its loop gain is `|3 a1 x^2 + b_1| / a2` (see `hystcomp_core::Wihc`), and
+//!   this split makes its largest value over the range the smallest possible. Its
+//!   convergence condition then reduces to the branch-slope constraints of the first operator.
+//! - inverse models: `b_1 = 0` (nothing depends on the split; Table 2 has `b_1 ~ 0`).
+//!
+//! # Constraints
+//! Every row is `coefficients . theta >= margin`:
+//!
+//! - **branch slopes** (both directions): `a2 + 3 a1 x^2 + b_1 + ... + b_k >= margin` at every
+//!   checkpoint `(k, x)` of [`hystcomp_core::branch_checkpoints`] over the normalised input
+//!   range `[0, 1]`: exactly the points where the core's invertibility check looks, so the
+//!   identified model always passes it (ERRATA item 5);
+//! - **PI part** (plant models): `a2 + b_1 + ... + b_k >= margin` for every `k` from the number
+//!   of zero thresholds to `n`, so that the analytic inverse of eq. (7) exists and IHC can be
+//!   built;
+//! - **delayed WIHC** (plant models): `a2 - (3 a1 x^2 + z) >= margin` and
+//!   `a2 + (3 a1 x^2 + z) >= margin`, with `z` the sum of the zero-threshold weights, at the
+//!   inputs where `x^2` is extreme: the two linear halves of `|3 a1 x^2 + z| < a2`, under which
+//!   the delayed WIHC of eq. (9) converges.
+//!
+//! Rows that coincide are kept once.
+
+use std::ops::Range;
+
+use hystcomp_core::{OneSidedPlay, branch_checkpoints};
+use hystcomp_io::model_file::Direction;
+use nalgebra::{DMatrix, DVector};
+use serde::{Deserialize, Serialize};
+
+use crate::IdentifyError;
+
+/// The normalised input range the constraints are imposed on.
+const INPUT_RANGE: (f64, f64) = (0.0, 1.0);
+
+/// The parameters of one MPIM (eq. (4)) in normalised units, plus the output offset.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Parameters {
+    /// Cubic coefficient `a1`.
+    pub a1: f64,
+    /// Linear coefficient `a2`.
+    pub a2: f64,
+    /// Weights `b_i`, one per threshold.
+    pub weights: Vec<f64>,
+    /// The constant `c` added to the model output (0 unless the offset is fitted).
+    pub offset: f64,
+}
+
+/// What a constraint row stands for.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case", tag = "kind")]
+pub enum ConstraintKind {
+    /// `a2 + 3 a1 x^2 + b_1 + ... + b_k >= margin` (a branch-slope checkpoint).
+    BranchSlope {
+        /// Number of moving operators `k`.
+        active_operators: usize,
+        /// Normalised input `x`.
+        input: f64,
+    },
+    /// `a2 + b_1 + ... + b_k >= margin` (eq. (7) exists).
+    PiPart {
+        /// Number of operators `k` in the prefix sum.
+        active_operators: usize,
+    },
+    /// `a2 - sign (3 a1 x^2 + z) >= margin` (the delayed WIHC converges).
+    DelayedWihc {
+        /// Normalised input `x`.
+        input: f64,
+        /// `+1` or `-1`.
+        sign: f64,
+    },
+}
+
+/// One linear constraint `coefficients . theta >= margin` on the problem's parameter vector.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Constraint {
+    /// One coefficient per entry of the parameter vector.
+    pub coefficients: Vec<f64>,
+    /// What it stands for.
+    pub kind: ConstraintKind,
+}
+
+/// The normalised samples one problem is built from.
+#[derive(Debug, Clone)]
+pub struct ProblemData<'a> {
+    /// The model input, normalised to `[0, 1]` over the record, every sample from the first
+    /// (the operators run over all of them from zero memory).
+    pub input: &'a [f64],
+    /// The model output to fit, normalised, same length.
+    pub output: &'a [f64],
+    /// The samples (indices into `input`) the error is minimised over.
+    pub fit: Range<usize>,
+}
+
+/// The fitting problem for one set of thresholds: the cost of any parameter vector and the
+/// constraints it must meet. See the [module documentation](self).
+///
+/// The parameter vector `theta` is `[a1, s, b_j..., c]`: `s` is `a2`, or `a2 + b_1` when the
+/// first threshold is 0 (then `b_1` is not an entry); the `b_j` follow for the other
+/// thresholds; `c` (the output offset) is last when it is fitted.
+#[derive(Debug, Clone)]
+pub struct FitProblem {
+    thresholds: Vec<f64>,
+    direction: Direction,
+    fit_offset: bool,
+    /// `r_1 = 0`: `b_1` folded into `s`.
+    folded: bool,
+    /// `b_1 = split * a1` when folded.
+    split: f64,
+    samples: usize,
+    /// `R S^-1`: `||Phi theta - y|| = ||r_theta theta - d||` up to `rho`.
+    r_theta: DMatrix<f64>,
+    /// `R` of the column-scaled regressors (upper triangular).
+    r_scaled: DMatrix<f64>,
+    /// `S`: `theta = S z` (1 / RMS of each regressor column).
+    column_scale: DVector<f64>,
+    d: DVector<f64>,
+    /// `rho^2`, the squared error no parameter vector can remove.
+    residual_floor: f64,
+    condition: f64,
+    constraints: Vec<Constraint>,
+    margin: f64,
+}
+
+impl FitProblem {
+    /// Builds the problem: regressors with the core's play operators, column scaling, one QR,
+    /// the condition number and the constraints (see the [module documentation](self)).
+    ///
+    /// `thresholds` must be strictly increasing in `[0, 1)` and `data.fit` a non-empty range of
+    /// at least `dimension() + 1` samples within the record (checked).
+    pub fn new(
+        data: ProblemData<'_>,
+        thresholds: &[f64],
+        direction: Direction,
+        fit_offset: bool,
+        margin: f64,
+    ) -> Result<Self, IdentifyError> {
+        let ProblemData { input, output, fit } = data;
+        let folded = thresholds.first() == Some(&0.0);
+        let n = thresholds.len();
+        let p = n + 2 - usize::from(folded) + usize::from(fit_offset);
+        if input.len() != output.len() || fit.end > input.len() || fit.len() < p + 1 {
+            return Err(IdentifyError::InvalidOption {
+                option: "fitting span",
+                value: format!("{}..{} of {} samples", fit.start, fit.end, input.len()),
+                reason: format!("a model with {p} parameters needs at least {} samples", p + 1),
+            });
+        }
+        let rows = fit.len();
+
+        // [Phi | y], column by column (each operator is independent: one pass per column).
+        let mut phi = DMatrix::<f64>::zeros(rows, p + 1);
+        let span = &input[fit.clone()];
+        for (i, &x) in span.iter().enumerate() {
+            phi[(i, 0)] = x * x * x;
+            phi[(i, 1)] = x;
+        }
+        let first_free = usize::from(folded);
+        for (j, &r) in thresholds.iter().enumerate().skip(first_free) {
+            let column = 2 + j - first_free;
+            let mut operator = OneSidedPlay::new(r, 0.0)?;
+            let mut target = phi.column_mut(column);
+            for (k, &x) in input[..fit.end].iter().enumerate() {
+                let w = operator.step(x);
+                if k >= fit.start {
+                    target[k - fit.start] = w;
+                }
+            }
+        }
+        if fit_offset {
+            phi.column_mut(p - 1).fill(1.0);
+        }
+        phi.column_mut(p).copy_from_slice(&output[fit.clone()]);
+
+        // Scale each regressor column to unit RMS (theta = S z).
+        let sqrt_rows = (rows as f64).sqrt();
+        let mut column_scale = DVector::<f64>::from_element(p, 1.0);
+        for j in 0..p {
+            let norm = phi.column(j).norm();
+            if norm > 0.0 && norm.is_finite() {
+                column_scale[j] = sqrt_rows / norm;
+                phi.column_mut(j).scale_mut(column_scale[j]);
+            } else {
+                column_scale[j] = 0.0;
+            }
+        }
+        let r_aug = phi.qr().unpack_r();
+        let r_scaled = r_aug.view((0, 0), (p, p)).into_owned();
+        let d = r_aug.view((0, p), (p, 1)).column(0).into_owned();
+        let residual_floor = r_aug[(p, p)] * r_aug[(p, p)];
+
+        let condition = if column_scale.iter().any(|&s| s == 0.0) {
+            f64::INFINITY
+        } else {
+            let singular = r_scaled.clone().singular_values();
+            let max = singular.max();
+            let min = singular.min();
+            if min > 0.0 { max / min } else { f64::INFINITY }
+        };
+        let mut r_theta = r_scaled.clone();
+        for j in 0..p {
+            let s = column_scale[j];
+            r_theta
+                .column_mut(j)
+                .scale_mut(if s > 0.0 { 1.0 / s } else { 0.0 });
+        }
+
+        let split = match direction {
+            Direction::Plant => {
+                let (lo, hi) = INPUT_RANGE;
+                let (m_lo, m_hi) = square_range(lo, hi);
+                -1.5 * (m_lo + m_hi)
+            }
+            Direction::Inverse => 0.0,
+        };
+        let mut problem = FitProblem {
+            thresholds: thresholds.to_vec(),
+            direction,
+            fit_offset,
+            folded,
+            split,
+            samples: rows,
+            r_theta,
+            r_scaled,
+            column_scale,
+            d,
+            residual_floor,
+            condition,
+            constraints: Vec::new(),
+            margin,
+        };
+        problem.constraints = problem.build_constraints();
+        Ok(problem)
+    }
+
+    /// The number of entries of the parameter vector.
+    pub fn dimension(&self) -> usize {
+        self.r_theta.ncols()
+    }
+
+    /// The names of the parameter vector's entries (`a1`, `a2` or `a2+b1`, `b2`, ..., `c`).
+    pub fn parameter_names(&self) -> Vec<String> {
+        let mut names = vec![
+            "a1".to_owned(),
+            if self.folded { "a2+b1" } else { "a2" }.to_owned(),
+        ];
+        for j in usize::from(self.folded)..self.thresholds.len() {
+            names.push(format!("b{}", j + 1));
+        }
+        if self.fit_offset {
+            names.push("c".to_owned());
+        }
+        names
+    }
+
+    /// The thresholds `r_i`.
+    pub fn thresholds(&self) -> &[f64] {
+        &self.thresholds
+    }
+
+    /// The direction the model maps (decides the constraints and the zero-threshold split).
+    pub fn direction(&self) -> Direction {
+        self.direction
+    }
+
+    /// Whether the output offset `c` is a parameter.
+    pub fn fits_offset(&self) -> bool {
+        self.fit_offset
+    }
+
+    /// The number of samples of the fitting span.
+    pub fn samples(&self) -> usize {
+        self.samples
+    }
+
+    /// The condition number of the column-scaled regressor matrix (infinite when a column is
+    /// zero or the columns are dependent).
+    pub fn condition_number(&self) -> f64 {
+        self.condition
+    }
+
+    /// The constraints, each `coefficients . theta >= margin`.
+    pub fn constraints(&self) -> &[Constraint] {
+        &self.constraints
+    }
+
+    /// The smallest branch slope every constraint demands.
+    pub fn margin(&self) -> f64 {
+        self.margin
+    }
+
+    /// The RMS model error over the fitting span, in normalised output units, of the
+    /// parameter vector `theta` (NaN when `theta` has the wrong length). The one cost function
+    /// both solvers minimise.
+    pub fn cost(&self, theta: &[f64]) -> f64 {
+        if theta.len() != self.dimension() {
+            return f64::NAN;
+        }
+        let p = self.dimension();
+        let mut sum = self.residual_floor;
+        for i in 0..p {
+            let mut e = -self.d[i];
+            for (j, t) in theta.iter().enumerate().skip(i) {
+                e += self.r_theta[(i, j)] * t;
+            }
+            sum += e * e;
+        }
+        (sum / self.samples as f64).sqrt()
+    }
+
+    /// The total violation `sum_j max(0, margin - a_j . theta)` of the constraints (0 when
+    /// `theta` meets them all), in normalised slope units.
+    pub fn violation(&self, theta: &[f64]) -> f64 {
+        self.constraints
+            .iter()
+            .map(|c| (self.margin - dot(&c.coefficients, theta)).max(0.0))
+            .sum()
+    }
+
+    /// The smallest `a_j . theta - margin` over the constraints (>= 0 when all are met).
+    pub fn smallest_slack(&self, theta: &[f64]) -> f64 {
+        self.constraints
+            .iter()
+            .map(|c| dot(&c.coefficients, theta) - self.margin)
+            .fold(f64::INFINITY, f64::min)
+    }
+
+    /// The model parameters of a parameter vector (the zero-threshold split applied).
+    pub fn parameters(&self, theta: &[f64]) -> Parameters {
+        let full = self.to_full(theta);
+        let n = self.thresholds.len();
+        Parameters {
+            a1: full[0],
+            a2: full[1],
+            weights: full[2..2 + n].to_vec(),
+            offset: if self.fit_offset { full[2 + n] } else { 0.0 },
+        }
+    }
+
+    /// The parameter vector of model parameters (the inverse of [`FitProblem::parameters`] up
+    /// to the split: with a zero threshold only `a2 + b_1` is kept).
+    pub fn theta(&self, parameters: &Parameters) -> Vec<f64> {
+        let mut theta = vec![parameters.a1, parameters.a2];
+        let mut weights = parameters.weights.iter();
+        if self.folded {
+            theta[1] += weights.next().copied().unwrap_or(0.0);
+        }
+        theta.extend(weights);
+        if self.fit_offset {
+            theta.push(parameters.offset);
+        }
+        theta
+    }
+
+    /// The upper-triangular factor `R` of the column-scaled regressors and the right-hand side
+    /// `d`: `||Phi S z - y||^2 = ||R z - d||^2 + rho^2` with `theta = S z`.
+    pub(crate) fn scaled_system(&self) -> (&DMatrix<f64>, &DVector<f64>, &DVector<f64>) {
+        (&self.r_scaled, &self.d, &self.column_scale)
+    }
+
+    /// Full parameters `[a1, a2, b_1..b_n, (c)]` of a parameter vector.
+    fn to_full(&self, theta: &[f64]) -> Vec<f64> {
+        let n = self.thresholds.len();
+        let mut full = Vec::with_capacity(n + 3);
+        let a1 = theta[0];
+        full.push(a1);
+        if self.folded {
+            let b1 = self.split * a1;
+            full.push(theta[1] - b1);
+            full.push(b1);
+            full.extend_from_slice(&theta[2..2 + n - 1]);
+        } else {
+            full.push(theta[1]);
+            full.extend_from_slice(&theta[2..2 + n]);
+        }
+        if self.fit_offset {
+            full.push(theta[theta.len() - 1]);
+        }
+        full
+    }
+
+    /// A constraint row on the full parameters `[a1, a2, b_1..b_n, (c)]`, as a row on `theta`.
+    fn reduce_row(&self, full: &[f64]) -> Vec<f64> {
+        let p = self.dimension();
+        let n = self.thresholds.len();
+        let mut row = vec![0.0; p];
+        row[0] = full[0];
+        row[1] = full[1];
+        if self.folded {
+            // a2 = s - split a1, b1 = split a1.
+            row[0] += self.split * (full[2] - full[1]);
+            row[2..2 + n - 1].copy_from_slice(&full[3..3 + n - 1]);
+        } else {
+            row[2..2 + n].copy_from_slice(&full[2..2 + n]);
+        }
+        row
+    }
+
+    fn build_constraints(&self) -> Vec<Constraint> {
+        let n = self.thresholds.len();
+        let full_len = n + 2 + usize::from(self.fit_offset);
+        let (lo, hi) = INPUT_RANGE;
+        let mut rows: Vec<Constraint> = Vec::new();
+        let push = |full: Vec<f64>, kind: ConstraintKind, rows: &mut Vec<Constraint>| {
+            let coefficients = self.reduce_row(&full);
+            let duplicate = rows.iter().any(|c| {
+                c.coefficients
+                    .iter()
+                    .zip(&coefficients)
+                    .all(|(a, b)| (a - b).abs() <= 1e-12 * (1.0 + a.abs()))
+            });
+            if !duplicate {
+                rows.push(Constraint { coefficients, kind });
+            }
+        };
+        // Branch slopes: a2 + 3 a1 x^2 + b_1 + ... + b_k.
+        let mut checkpoints = Vec::new();
+        branch_checkpoints(&self.thresholds, lo, hi, |k, x| checkpoints.push((k, x)));
+        for (k, x) in checkpoints {
+            let mut full = vec![0.0; full_len];
+            full[0] = 3.0 * x * x;
+            full[1] = 1.0;
+            full[2..2 + k].fill(1.0);
+            push(
+                full,
+                ConstraintKind::BranchSlope {
+                    active_operators: k,
+                    input: x,
+                },
+                &mut rows,
+            );
+        }
+        if self.direction == Direction::Plant {
+            let always = self.thresholds.iter().take_while(|r| **r <= 0.0).count();
+            // PI part, eq. (7): a2 + b_1 + ... + b_k.
+            for k in always..=n {
+                let mut full = vec![0.0; full_len];
+                full[1] = 1.0;
+                full[2..2 + k].fill(1.0);
+                push(
+                    full,
+                    ConstraintKind::PiPart {
+                        active_operators: k,
+                    },
+                    &mut rows,
+                );
+            }
+            // Delayed WIHC: a2 -+ (3 a1 x^2 + z) at the inputs where x^2 is extreme.
+            let mut inputs = vec![lo, hi];
+            if lo < 0.0 && 0.0 < hi {
+                inputs.push(0.0);
+            }
+            for x in inputs {
+                for sign in [1.0, -1.0] {
+                    let mut full = vec![0.0; full_len];
+                    full[0] = -sign * 3.0 * x * x;
+                    full[1] = 1.0;
+                    full[2..2 + always].fill(-sign);
+                    push(full, ConstraintKind::DelayedWihc { input: x, sign }, &mut rows);
+                }
+            }
+        }
+        rows
+    }
+}
+
+/// The smallest and largest `x^2` for `x` in `[lo, hi]`.
+fn square_range(lo: f64, hi: f64) -> (f64, f64) {
+    let max = (lo * lo).max(hi * hi);
+    let min = if lo <= 0.0 && 0.0 <= hi {
+        0.0
+    } else {
+        (lo * lo).min(hi * hi)
+    };
+    (min, max)
+}
+
+pub(crate) fn dot(a: &[f64], b: &[f64]) -> f64 {
+    a.iter().zip(b).map(|(x, y)| x * y).sum()
+}

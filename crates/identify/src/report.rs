@@ -1,0 +1,128 @@
+//! Fit reports: errors in physical units and in % of a range, sample counts, solver details.
+
+use hystcomp_io::model_file::Direction;
+use serde::{Deserialize, Serialize};
+
+use crate::{OutputOffset, PsoOptions};
+
+/// Errors of a prediction over a span of samples.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct ErrorStats {
+    /// Number of samples.
+    pub samples: usize,
+    /// Root mean square error, in the signal's unit.
+    pub rms: f64,
+    /// Largest absolute error, in the signal's unit.
+    pub max: f64,
+    /// Mean error (prediction minus measurement), in the signal's unit: a bias or offset drift.
+    pub mean: f64,
+    /// The range the percentages refer to, in the signal's unit.
+    pub range: f64,
+    /// `rms / range * 100`.
+    pub rms_percent: f64,
+    /// `max / range * 100`.
+    pub max_percent: f64,
+    /// The RMS of the error minus its mean (what an offset correction cannot remove), in % of
+    /// the range.
+    pub std_percent: f64,
+}
+
+impl ErrorStats {
+    /// Statistics of `predicted - measured`, in % of `range`. `None` for no samples.
+    pub fn new(predicted: &[f64], measured: &[f64], range: f64) -> Option<Self> {
+        let samples = predicted.len().min(measured.len());
+        if samples == 0 {
+            return None;
+        }
+        let (mut sum, mut sum_sq, mut max) = (0.0, 0.0, 0.0_f64);
+        for (p, m) in predicted.iter().zip(measured) {
+            let e = p - m;
+            sum += e;
+            sum_sq += e * e;
+            max = max.max(e.abs());
+        }
+        let n = samples as f64;
+        let rms = (sum_sq / n).sqrt();
+        let mean = sum / n;
+        let std = (sum_sq / n - mean * mean).max(0.0).sqrt();
+        Some(ErrorStats {
+            samples,
+            rms,
+            max,
+            mean,
+            range,
+            rms_percent: 100.0 * rms / range,
+            max_percent: 100.0 * max / range,
+            std_percent: 100.0 * std / range,
+        })
+    }
+}
+
+/// The physical range of one signal of a record.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct SignalRange {
+    /// `voltage` or `displacement`.
+    pub quantity: String,
+    /// Its unit.
+    pub unit: String,
+    /// Smallest value of the record.
+    pub min: f64,
+    /// Largest value of the record.
+    pub max: f64,
+}
+
+/// How the samples of a record were used.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+pub struct SampleCounts {
+    /// Samples in the record (the operators run over all of them).
+    pub total: usize,
+    /// Samples at the start excluded as warm-up.
+    pub warmup: usize,
+    /// Samples the error was minimised over.
+    pub fit: usize,
+    /// Samples at the end held out of the fit.
+    pub holdout: usize,
+}
+
+/// What [`crate::identify`] did and how well the model fits. Serialisable: the command line
+/// prints it with `--json` and writes it into the model file's `identification` field.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct FitReport {
+    /// What the model maps.
+    pub direction: Direction,
+    /// `ls` or `pso`.
+    pub solver: String,
+    /// How the solver reached its answer.
+    pub detail: String,
+    /// The thresholds `r_i` (normalised).
+    pub thresholds: Vec<f64>,
+    /// Sample counts.
+    pub samples: SampleCounts,
+    /// The model input's physical range (normalised to `[0, 1]`).
+    pub input: SignalRange,
+    /// The model output's physical range (its width is the output scale).
+    pub output: SignalRange,
+    /// How the output offset was handled.
+    pub offset_mode: OutputOffset,
+    /// The model file's `output.offset`: the physical output at normalised output 0.
+    pub output_offset: f64,
+    /// Errors over the fitting span, in the output's unit and % of the output range.
+    pub fit: ErrorStats,
+    /// Errors over the held-out span, if any.
+    pub holdout: Option<ErrorStats>,
+    /// Condition number of the column-scaled regressor matrix.
+    pub condition_number: f64,
+    /// Number of linear constraints.
+    pub constraints: usize,
+    /// Number of constraints holding with equality.
+    pub active_constraints: usize,
+    /// The slope margin every constraint demands (normalised).
+    pub margin: f64,
+    /// The smallest branch slope of the model over its input range (the core's check).
+    pub min_branch_slope: f64,
+    /// The swarm's settings, when the solver was `pso`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub pso: Option<PsoOptions>,
+    /// Wall-clock time of the identification, in seconds.
+    pub elapsed_s: f64,
+}
