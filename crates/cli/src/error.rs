@@ -6,6 +6,9 @@ use std::fmt;
 pub const EXIT_INPUT: u8 = 1;
 /// Exit code for a failure while writing results.
 pub const EXIT_OUTPUT: u8 = 3;
+/// Exit code when the work was done but the desired trajectory left the reachable range, so
+/// the drive was clamped to its limits (the output is written; see `--allow-saturation`).
+pub const EXIT_SATURATED: u8 = 4;
 
 /// An error that ends the command with a message on stderr and a non-zero exit code.
 #[derive(Debug)]
@@ -28,6 +31,14 @@ impl CliError {
         CliError {
             message: message.into(),
             exit_code: EXIT_OUTPUT,
+        }
+    }
+
+    /// An error with a given exit code (never 0).
+    pub fn with_code(message: impl Into<String>, exit_code: u8) -> Self {
+        CliError {
+            message: message.into(),
+            exit_code: exit_code.max(1),
         }
     }
 

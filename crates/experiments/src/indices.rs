@@ -209,7 +209,10 @@ mod tests {
             e_mhe_percent(&[1.0; 4], &[1.0; 4], 10),
             Err(IndexError::ConstantDesired)
         );
-        assert_eq!(e_m_percent(&[1.0], &[1.0]), Err(IndexError::TooFewSamples(1)));
+        assert_eq!(
+            e_m_percent(&[1.0], &[1.0]),
+            Err(IndexError::TooFewSamples(1))
+        );
         assert_eq!(e_mhe_percent(&d, &d, 0), Err(IndexError::NoBins));
     }
 }

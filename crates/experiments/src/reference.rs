@@ -105,11 +105,17 @@ mod tests {
         let r = Reference::paper();
         assert_eq!(r.table1_forward_mpim.weights.len(), 10);
         assert_eq!(r.table2_inverse_mpim.thresholds.len(), 10);
-        let shared = concat!(env!("CARGO_MANIFEST_DIR"), "/../../../shared/paper/reference.toml");
+        let shared = concat!(
+            env!("CARGO_MANIFEST_DIR"),
+            "/../../../shared/paper/reference.toml"
+        );
         match std::fs::read_to_string(shared) {
             Ok(text) => {
                 // The copy only adds a citation header; the body must be identical.
-                assert!(REFERENCE_TOML.ends_with(&text), "reference.toml differs from {shared}");
+                assert!(
+                    REFERENCE_TOML.ends_with(&text),
+                    "reference.toml differs from {shared}"
+                );
             }
             Err(_) => eprintln!("skipping the comparison: {shared} is absent on this machine"),
         }

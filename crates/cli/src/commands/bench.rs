@@ -1,12 +1,263 @@
-//! `hystcomp bench` (not implemented yet).
+//! `hystcomp bench`: the per-sample cost of the forward MPIM and of every compensator, so a
+//! user can check the budget of their control loop on their own machine.
+//!
+//! Each figure is the median over repeated runs of a whole trajectory, divided by its length.
+//! The criterion benches (`cargo bench -p hystcomp-core`) measure the same with statistics.
+
+use std::hint::black_box;
+use std::path::PathBuf;
+use std::time::Instant;
+
+use hystcomp_core::{paper, Compensator, Dihc, Ihc, Mpim, OutputLimits, Real, SolveMode, Wihc};
+use hystcomp_io::model_file::{Direction, ModelFile};
+use serde::Serialize;
 
 use crate::{CliError, Context};
 
 /// Arguments of `hystcomp bench`.
 #[derive(Debug, clap::Args)]
-pub struct Args {}
+pub struct Args {
+    /// Samples per timed run.
+    #[arg(long, default_value_t = 20_000)]
+    samples: usize,
+    /// Timed runs per figure (the median is reported).
+    #[arg(long, default_value_t = 15)]
+    repeats: usize,
+    /// Also time this model file (its own operator count): a plant model times the forward
+    /// model, IHC and WIHC; an inverse model times DIHC.
+    #[arg(long, value_name = "FILE")]
+    model: Option<PathBuf>,
+}
+
+/// One measured figure.
+#[derive(Debug, Clone, Serialize)]
+struct Figure {
+    /// `mpim-forward`, `ihc`, `ihc-delayed`, `wihc`, `wihc-delayed` or `dihc`.
+    what: &'static str,
+    /// Where the model came from: `table1` / `table2` spread over `operators`, or the file.
+    model: String,
+    operators: usize,
+    /// `f64` or `f32`.
+    precision: &'static str,
+    /// Median cost per sample, ns.
+    median_ns_per_sample: f64,
+    /// Fastest run, ns per sample.
+    min_ns_per_sample: f64,
+}
+
+#[derive(Debug, Serialize)]
+struct Report {
+    samples: usize,
+    repeats: usize,
+    figures: Vec<Figure>,
+}
+
+/// Median and minimum of `repeats` timed runs of `run`, in ns per sample.
+fn time(samples: usize, repeats: usize, mut run: impl FnMut()) -> (f64, f64) {
+    run(); // warm up caches and branch predictors
+    let mut per_sample: Vec<f64> = (0..repeats)
+        .map(|_| {
+            let start = Instant::now();
+            run();
+            start.elapsed().as_secs_f64() * 1e9 / samples as f64
+        })
+        .collect();
+    per_sample.sort_by(f64::total_cmp);
+    (per_sample[per_sample.len() / 2], per_sample[0])
+}
+
+/// The paper's trajectory shape in normalised voltage, through `plant`: every desired sample
+/// is reachable.
+fn trajectory<T: Real>(plant: &Mpim<T, Vec<T>>, samples: usize) -> (Vec<T>, Vec<T>) {
+    let mut p = plant.clone();
+    let volts: Vec<T> = (0..samples)
+        .map(|k| {
+            let t = k as f64 / samples as f64 * 10.0;
+            T::from_f64(
+                0.5 + 0.14 * (std::f64::consts::PI * t + 2.6).sin()
+                    + 0.14 * (1.6 * std::f64::consts::PI * t + 3.0).sin()
+                    + 0.2 * (2.0 * std::f64::consts::PI * t + 1.5).sin(),
+            )
+        })
+        .collect();
+    let desired = volts.iter().map(|&v| p.step(v)).collect();
+    (volts, desired)
+}
+
+struct Bench {
+    samples: usize,
+    repeats: usize,
+    figures: Vec<Figure>,
+}
+
+impl Bench {
+    fn record(
+        &mut self,
+        what: &'static str,
+        model: &str,
+        operators: usize,
+        precision: &'static str,
+        run: impl FnMut(),
+    ) {
+        let (median, min) = time(self.samples, self.repeats, run);
+        self.figures.push(Figure {
+            what,
+            model: model.to_string(),
+            operators,
+            precision,
+            median_ns_per_sample: median,
+            min_ns_per_sample: min,
+        });
+    }
+
+    fn plant<T: Real>(
+        &mut self,
+        name: &str,
+        plant: &Mpim<T, Vec<T>>,
+        precision: &'static str,
+    ) -> Result<(), CliError> {
+        let n = plant.len();
+        let (volts, desired) = trajectory(plant, self.samples);
+        let mut out = vec![T::zero(); self.samples];
+        let mut forward = plant.clone();
+        self.record("mpim-forward", name, n, precision, || {
+            forward.reset();
+            forward
+                .process(black_box(&volts), &mut out)
+                .expect("equal lengths");
+        });
+        let limits = OutputLimits::new(T::zero(), T::one())?;
+        let compensators: [(&'static str, Box<dyn Compensator<T>>); 4] = [
+            (
+                "ihc",
+                Box::new(Ihc::<T, Vec<T>>::new(plant, limits, SolveMode::Exact)?),
+            ),
+            (
+                "ihc-delayed",
+                Box::new(Ihc::<T, Vec<T>>::new(plant, limits, SolveMode::Delayed)?),
+            ),
+            (
+                "wihc",
+                Box::new(Wihc::<T, Vec<T>>::new(plant, limits, SolveMode::Exact)?),
+            ),
+            (
+                "wihc-delayed",
+                Box::new(Wihc::<T, Vec<T>>::new(plant, limits, SolveMode::Delayed)?),
+            ),
+        ];
+        for (what, mut c) in compensators {
+            self.record(what, name, n, precision, || {
+                c.reset();
+                c.process(black_box(&desired), &mut out)
+                    .expect("equal lengths");
+            });
+        }
+        Ok(())
+    }
+
+    fn inverse<T: Real>(
+        &mut self,
+        name: &str,
+        inverse: &Mpim<T, Vec<T>>,
+        precision: &'static str,
+    ) -> Result<(), CliError> {
+        let n = inverse.len();
+        let desired: Vec<T> = (0..self.samples)
+            .map(|k| T::from_f64(0.5 + 0.45 * (k as f64 * 6e-4).sin()))
+            .collect();
+        let mut out = vec![T::zero(); self.samples];
+        let limits = OutputLimits::new(T::from_f64(-1.0), T::from_f64(2.0))?;
+        let mut c = Dihc::<T, Vec<T>>::new(inverse, T::zero(), T::one(), limits)?;
+        self.record("dihc", name, n, precision, || {
+            c.reset();
+            c.process(black_box(&desired), &mut out)
+                .expect("equal lengths");
+        });
+        Ok(())
+    }
+}
 
 /// Runs `hystcomp bench`.
-pub fn run(_args: &Args, _ctx: Context) -> Result<(), CliError> {
-    Err(CliError::input("`hystcomp bench` is not implemented yet"))
+pub fn run(args: &Args, ctx: Context) -> Result<(), CliError> {
+    if args.samples < 100 || args.repeats == 0 {
+        return Err(CliError::input(
+            "--samples must be at least 100 and --repeats at least 1",
+        ));
+    }
+    let user_model = args.model.as_deref().map(ModelFile::load).transpose()?;
+    let mut bench = Bench {
+        samples: args.samples,
+        repeats: args.repeats,
+        figures: Vec::new(),
+    };
+    for n in [10, 100] {
+        let name = if n == 10 {
+            "table1".to_string()
+        } else {
+            format!("table1 spread over {n}")
+        };
+        bench.plant::<f64>(&name, &paper::TABLE1.spread(n)?, "f64")?;
+        bench.plant::<f32>(&name, &paper::TABLE1.spread(n)?, "f32")?;
+        let name = name.replace("table1", "table2");
+        bench.inverse::<f64>(&name, &paper::TABLE2.spread(n)?, "f64")?;
+        bench.inverse::<f32>(&name, &paper::TABLE2.spread(n)?, "f32")?;
+    }
+    if let (Some(file), Some(path)) = (&user_model, &args.model) {
+        let name = path.display().to_string();
+        let model = file.model()?;
+        match file.direction {
+            Direction::Plant => bench.plant::<f64>(&name, &model, "f64").map_err(|e| {
+                e.context(format!("{name} (the model must be invertible on [0, 1])"))
+            })?,
+            Direction::Inverse => bench.inverse::<f64>(&name, &model, "f64")?,
+        }
+    }
+    let report = Report {
+        samples: args.samples,
+        repeats: args.repeats,
+        figures: bench.figures,
+    };
+    if ctx.json {
+        println!(
+            "{}",
+            serde_json::to_string_pretty(&report).map_err(|e| CliError::output(e.to_string()))?
+        );
+        return Ok(());
+    }
+    println!(
+        "per-sample cost, ns (median of {} runs of {} samples; fastest in brackets)",
+        report.repeats, report.samples
+    );
+    println!("{:<14} {:>10} {:>22} {:>22}", "", "operators", "f64", "f32");
+    let mut rows: Vec<(&str, String, usize)> = Vec::new();
+    for f in &report.figures {
+        let key = (f.what, f.model.clone(), f.operators);
+        if !rows.contains(&key) {
+            rows.push(key);
+        }
+    }
+    for (what, model, n) in rows {
+        let cell = |precision: &str| {
+            report
+                .figures
+                .iter()
+                .find(|f| {
+                    f.what == what
+                        && f.model == model
+                        && f.operators == n
+                        && f.precision == precision
+                })
+                .map(|f| format!("{:.1} ({:.1})", f.median_ns_per_sample, f.min_ns_per_sample))
+                .unwrap_or_else(|| "-".into())
+        };
+        println!(
+            "{:<14} {:>10} {:>22} {:>22}   {}",
+            what,
+            n,
+            cell("f64"),
+            cell("f32"),
+            model
+        );
+    }
+    Ok(())
 }
