@@ -26,7 +26,10 @@ pub struct Record<'a> {
 
 impl Record<'_> {
     fn check(&self) -> Result<(), IdentifyError> {
-        check_same_length(&[("voltage", self.voltage), ("displacement", self.displacement)])?;
+        check_same_length(&[
+            ("voltage", self.voltage),
+            ("displacement", self.displacement),
+        ])?;
         check_finite("voltage", self.voltage)?;
         check_finite("displacement", self.displacement)?;
         check_not_constant("voltage", self.voltage)?;
@@ -123,8 +126,12 @@ pub fn crossval(
     let mut inverse_options = options.identify.clone();
     inverse_options.direction = Direction::Inverse;
     let plant = identify_observed(train.voltage, train.displacement, &plant_options, observer)?;
-    let inverse =
-        identify_observed(train.voltage, train.displacement, &inverse_options, observer)?;
+    let inverse = identify_observed(
+        train.voltage,
+        train.displacement,
+        &inverse_options,
+        observer,
+    )?;
     let (v_min, v_max) = min_max(train.voltage);
     let test_report = validate_models(
         &plant.model,

@@ -98,8 +98,8 @@ pub fn identify_observed(
 
     let thresholds = options.thresholds.values()?;
     let fit_offset = options.offset == OutputOffset::Fit;
-    let parameters_count = thresholds.len() + 2 - usize::from(thresholds[0] == 0.0)
-        + usize::from(fit_offset);
+    let parameters_count =
+        thresholds.len() + 2 - usize::from(thresholds[0] == 0.0) + usize::from(fit_offset);
     let total = x.len();
     let warmup = match options.warmup {
         Warmup::Auto => auto_warmup(voltage),
@@ -228,8 +228,13 @@ pub fn identify_observed(
         },
         elapsed_s: started.elapsed().as_secs_f64(),
     };
-    let mut file =
-        ModelFile::from_model(options.direction, input_scale, output_scale, [0.0, 1.0], &model)?;
+    let mut file = ModelFile::from_model(
+        options.direction,
+        input_scale,
+        output_scale,
+        [0.0, 1.0],
+        &model,
+    )?;
     file.description = Some(format!(
         "MPIM ({}) identified by hystcomp ({}) from {} samples: {} {} -> {} {}",
         options.direction,

@@ -44,10 +44,12 @@ impl Solver for LeastSquares {
         observer: &mut dyn Observer,
     ) -> Result<Solution, IdentifyError> {
         let (r, d, scale) = problem.scaled_system();
-        let z = r.solve_upper_triangular(d).ok_or(IdentifyError::IllConditioned {
-            condition: f64::INFINITY,
-            limit: f64::INFINITY,
-        })?;
+        let z = r
+            .solve_upper_triangular(d)
+            .ok_or(IdentifyError::IllConditioned {
+                condition: f64::INFINITY,
+                limit: f64::INFINITY,
+            })?;
         let theta: Vec<f64> = z.iter().zip(scale.iter()).map(|(z, s)| z * s).collect();
         let solution = if problem.smallest_slack(&theta) >= 0.0 {
             finish(
@@ -90,11 +92,7 @@ fn constrained(problem: &FitProblem) -> Result<Solution, IdentifyError> {
     let qp = QuadraticProgram::new(problem);
     let (z_ip, initial_active) = qp.interior_point()?;
     let theta_ip = qp.to_theta(&z_ip);
-    let ip = finish(
-        problem,
-        theta_ip,
-        "interior-point QP (Clarabel)".to_owned(),
-    );
+    let ip = finish(problem, theta_ip, "interior-point QP (Clarabel)".to_owned());
     if let Some((z, active)) = qp.active_set(initial_active) {
         let theta = qp.to_theta(&z);
         let polished = finish(
@@ -179,7 +177,10 @@ impl QuadraticProgram {
     }
 
     fn to_theta(&self, z: &[f64]) -> Vec<f64> {
-        z.iter().zip(self.scale.iter()).map(|(z, s)| z * s).collect()
+        z.iter()
+            .zip(self.scale.iter())
+            .map(|(z, s)| z * s)
+            .collect()
     }
 
     /// Clarabel on the whole programme: `z` and the constraints it leaves active (dual larger
@@ -224,11 +225,12 @@ impl QuadraticProgram {
             tol_feas: 1e-12,
             ..DefaultSettings::default()
         };
-        let mut solver = DefaultSolver::new(&big_p, &q, &big_a, &b, &cones, settings).map_err(
-            |e| IdentifyError::Solver {
-                reason: e.to_string(),
-            },
-        )?;
+        let mut solver =
+            DefaultSolver::new(&big_p, &q, &big_a, &b, &cones, settings).map_err(|e| {
+                IdentifyError::Solver {
+                    reason: e.to_string(),
+                }
+            })?;
         solver.solve();
         let solution = &solver.solution;
         match solution.status {
@@ -244,9 +246,7 @@ impl QuadraticProgram {
                 });
             }
         }
-        let active = (0..m)
-            .filter(|&j| solution.z[j] > solution.s[j])
-            .collect();
+        let active = (0..m).filter(|&j| solution.z[j] > solution.s[j]).collect();
         Ok((solution.x.clone(), active))
     }
 
@@ -276,7 +276,10 @@ impl QuadraticProgram {
         if residual > 1e-9 * (1.0 + rhs.amax()) {
             return None;
         }
-        Some((x.rows(0, p).iter().copied().collect(), x.rows(p, a).iter().copied().collect()))
+        Some((
+            x.rows(0, p).iter().copied().collect(),
+            x.rows(p, a).iter().copied().collect(),
+        ))
     }
 
     /// The primal-dual active-set iteration from `active`.

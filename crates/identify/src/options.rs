@@ -61,7 +61,10 @@ impl Thresholds {
                 if values.is_empty() {
                     return Err(invalid(text, "give at least one threshold"));
                 }
-                if values.iter().any(|r| !(r.is_finite() && (0.0..1.0).contains(r))) {
+                if values
+                    .iter()
+                    .any(|r| !(r.is_finite() && (0.0..1.0).contains(r)))
+                {
                     return Err(invalid(
                         text,
                         "thresholds are fractions of the input range: each must lie in [0, 1)",

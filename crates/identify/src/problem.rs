@@ -168,7 +168,10 @@ impl FitProblem {
             return Err(IdentifyError::InvalidOption {
                 option: "fitting span",
                 value: format!("{}..{} of {} samples", fit.start, fit.end, input.len()),
-                reason: format!("a model with {p} parameters needs at least {} samples", p + 1),
+                reason: format!(
+                    "a model with {p} parameters needs at least {} samples",
+                    p + 1
+                ),
             });
         }
         let rows = fit.len();
@@ -481,7 +484,11 @@ impl FitProblem {
                     full[0] = -sign * 3.0 * x * x;
                     full[1] = 1.0;
                     full[2..2 + always].fill(-sign);
-                    push(full, ConstraintKind::DelayedWihc { input: x, sign }, &mut rows);
+                    push(
+                        full,
+                        ConstraintKind::DelayedWihc { input: x, sign },
+                        &mut rows,
+                    );
                 }
             }
         }

@@ -198,7 +198,10 @@ impl PsoOptions {
             ));
         }
         let [w0, w1] = self.inertia;
-        if !(w0.is_finite() && w1.is_finite() && (0.0..=1.2).contains(&w0) && (0.0..=1.2).contains(&w1))
+        if !(w0.is_finite()
+            && w1.is_finite()
+            && (0.0..=1.2).contains(&w0)
+            && (0.0..=1.2).contains(&w1))
         {
             return Err(invalid(
                 "inertia",
@@ -414,8 +417,7 @@ impl Solver for ParticleSwarm {
         if o.polish {
             if let Some(mut polished) = polish_from(problem, &theta) {
                 let feasible = polished.violation <= FEASIBILITY_TOLERANCE * problem.margin();
-                if feasible && (swarm.violation > 0.0 || polished.cost <= swarm.cost)
-                {
+                if feasible && (swarm.violation > 0.0 || polished.cost <= swarm.cost) {
                     polished.detail = format!("{}, then {}", swarm.detail, polished.detail);
                     return Ok(polished);
                 }

@@ -1,12 +1,219 @@
-//! `hystcomp crossval` (not implemented yet).
+//! `hystcomp crossval`: identify on one record; on another, the forward prediction error and
+//! the offline inverse replay error of every compensator.
 
+use std::path::PathBuf;
+
+use hystcomp_identify::{CrossvalOptions, Record, Warmup, crossval};
+use hystcomp_io::data::{Column, RowRange};
+use hystcomp_io::model_file::Direction;
+use serde::Serialize;
+
+use super::identify::{ColumnArgs, FitArgs, load, print_fit};
+use crate::progress::Bar;
 use crate::{CliError, Context};
 
 /// Arguments of `hystcomp crossval`.
 #[derive(Debug, clap::Args)]
-pub struct Args {}
+pub struct Args {
+    /// Record to identify the models on (text or .mat; see `hystcomp identify --help`).
+    #[arg(long, value_name = "FILE")]
+    pub train: PathBuf,
+    /// Record to validate them on.
+    #[arg(long, value_name = "FILE")]
+    pub test: PathBuf,
+    /// The column options apply to both files unless overridden with --test-....
+    #[command(flatten)]
+    pub columns: ColumnArgs,
+    /// Voltage column of the test file, when it differs from --voltage-column.
+    #[arg(long, value_name = "COLUMN")]
+    pub test_voltage_column: Option<Column>,
+    /// Displacement column of the test file, when it differs from --displacement-column.
+    #[arg(long, value_name = "COLUMN")]
+    pub test_displacement_column: Option<Column>,
+    /// Time column of the test file, when it differs from --time-column.
+    #[arg(long, value_name = "COLUMN")]
+    pub test_time_column: Option<Column>,
+    /// Rows of the training file (instead of --rows), FIRST..LAST.
+    #[arg(long, value_name = "FIRST..LAST", value_parser = parse_rows)]
+    pub train_rows: Option<RowRange>,
+    /// Rows of the test file (instead of --rows), FIRST..LAST.
+    #[arg(long, value_name = "FIRST..LAST", value_parser = parse_rows)]
+    pub test_rows: Option<RowRange>,
+    /// Test samples left out of the errors at the start: a number, or auto (up to the first
+    /// sample within 5 % of the test voltage range from its minimum).
+    #[arg(long, default_value = "auto", value_name = "N|auto")]
+    pub test_warmup: String,
+    #[command(flatten)]
+    pub fit: FitArgs,
+    /// Fraction of the training record held out of the fit (reported in the fit summaries).
+    #[arg(long, default_value_t = 0.0, value_name = "FRACTION")]
+    pub holdout: f64,
+    /// Also write the plant model (for IHC and WIHC) to this file.
+    #[arg(long, value_name = "MODEL.json")]
+    pub save_plant: Option<PathBuf>,
+    /// Also write the inverse model (for DIHC) to this file.
+    #[arg(long, value_name = "MODEL.json")]
+    pub save_inverse: Option<PathBuf>,
+}
+
+fn parse_rows(text: &str) -> Result<RowRange, String> {
+    let text = if !text.contains("..") {
+        text.replacen(':', "..", 1)
+    } else {
+        text.to_owned()
+    };
+    text.parse()
+        .map_err(|e: hystcomp_io::data::DataError| e.to_string())
+}
+
+#[derive(Serialize)]
+struct Output<'a> {
+    train: String,
+    test: String,
+    report: &'a hystcomp_identify::CrossvalReport,
+    plant_model: &'a hystcomp_io::model_file::ModelFile,
+    inverse_model: &'a hystcomp_io::model_file::ModelFile,
+}
 
 /// Runs `hystcomp crossval`.
-pub fn run(_args: &Args, _ctx: Context) -> Result<(), CliError> {
-    Err(CliError::input("`hystcomp crossval` is not implemented yet"))
+pub fn run(args: &Args, ctx: Context) -> Result<(), CliError> {
+    let c = &args.columns;
+    let train = load(
+        &args.train,
+        c,
+        &c.voltage_column,
+        &c.displacement_column,
+        c.time_column.as_ref(),
+        args.train_rows.or(c.rows),
+    )?;
+    let test = load(
+        &args.test,
+        c,
+        args.test_voltage_column
+            .as_ref()
+            .unwrap_or(&c.voltage_column),
+        args.test_displacement_column
+            .as_ref()
+            .unwrap_or(&c.displacement_column),
+        args.test_time_column.as_ref().or(c.time_column.as_ref()),
+        args.test_rows.or(c.rows),
+    )?;
+    let test_warmup = match args.test_warmup.trim() {
+        w if w.eq_ignore_ascii_case("auto") => Warmup::Auto,
+        w => Warmup::Samples(w.parse().map_err(|_| {
+            CliError::input(format!(
+                "--test-warmup {w:?} is not usable: give a number of samples or auto"
+            ))
+        })?),
+    };
+    let identify = args
+        .fit
+        .options(c, Direction::Plant, args.holdout, &train)?;
+    let options = CrossvalOptions {
+        identify,
+        test_warmup,
+    };
+    let mut bar = if args.fit.iterates() {
+        Bar::new("identifying", args.fit.iterations as u64)
+    } else {
+        Bar::hidden()
+    };
+    let cv = crossval(
+        Record {
+            voltage: &train.voltage,
+            displacement: &train.displacement,
+        },
+        Record {
+            voltage: &test.voltage,
+            displacement: &test.displacement,
+        },
+        &options,
+        &mut bar,
+    )
+    .map_err(|e| {
+        CliError::from(e).context(format!(
+            "{} (train) / {} (test)",
+            args.train.display(),
+            args.test.display()
+        ))
+    })?;
+    bar.finish();
+    for (path, model) in [
+        (&args.save_plant, &cv.plant),
+        (&args.save_inverse, &cv.inverse),
+    ] {
+        if let Some(path) = path {
+            model
+                .save(path)
+                .map_err(|e| CliError::output(e.to_string()))?;
+        }
+    }
+
+    let report = &cv.report;
+    if ctx.json {
+        let output = Output {
+            train: args.train.display().to_string(),
+            test: args.test.display().to_string(),
+            report,
+            plant_model: &cv.plant,
+            inverse_model: &cv.inverse,
+        };
+        println!(
+            "{}",
+            serde_json::to_string_pretty(&output).map_err(|e| CliError::output(e.to_string()))?
+        );
+        return Ok(());
+    }
+    println!("identified on {}:", args.train.display());
+    println!("plant model (voltage -> displacement, for IHC and WIHC):");
+    print_fit(&report.plant);
+    println!("inverse model (displacement -> voltage, for DIHC):");
+    print_fit(&report.inverse);
+    let t = &report.test;
+    let f = &t.forward;
+    println!(
+        "validated on {} ({} samples, the first {} left out as warm-up):",
+        args.test.display(),
+        t.samples,
+        t.warmup
+    );
+    println!(
+        "  forward prediction of the displacement: RMS {:.3} %, max {:.3} % of its range \
+         ({:.4} {unit}); mean error {:.4} {unit}, RMS without it {:.3} %",
+        f.rms_percent,
+        f.max_percent,
+        f.range,
+        f.mean,
+        f.std_percent,
+        unit = c.displacement_unit
+    );
+    if t.voltage_outside_model_range > 0 || t.displacement_outside_model_range > 0 {
+        println!(
+            "  outside the training ranges: {} voltage and {} displacement samples",
+            t.voltage_outside_model_range, t.displacement_outside_model_range
+        );
+    }
+    println!(
+        "  offline inverse replay (measured displacement in, voltage out, vs the voltage \
+         applied; % of the test voltage range, limits {} .. {} {}):",
+        t.voltage_limits[0], t.voltage_limits[1], c.voltage_unit
+    );
+    println!(
+        "    {:14} {:>9} {:>9} {:>12} {:>10}",
+        "compensator", "RMS %", "max %", "mean", "saturated"
+    );
+    for r in &t.replay {
+        match (&r.error, &r.failure) {
+            (Some(e), _) => println!(
+                "    {:14} {:>9.3} {:>9.3} {:>12.5} {:>10}",
+                r.compensator, e.rms_percent, e.max_percent, e.mean, r.saturated
+            ),
+            (None, failure) => println!(
+                "    {:14} not built: {}",
+                r.compensator,
+                failure.as_deref().unwrap_or("unknown reason")
+            ),
+        }
+    }
+    Ok(())
 }

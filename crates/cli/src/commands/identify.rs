@@ -1,12 +1,487 @@
-//! `hystcomp identify` (not implemented yet).
+//! `hystcomp identify`: measured (voltage, displacement) samples in, a model file out.
 
+use std::path::{Path, PathBuf};
+
+use hystcomp_identify::{
+    IdentifyOptions, Method, OutputOffset, PsoBounds, PsoOptions, Thresholds, Warmup,
+    identify_observed,
+};
+use hystcomp_io::data::{self, Column, Delimiter, Header, ReadOptions, RowRange};
+use hystcomp_io::model_file::Direction;
+use serde::Serialize;
+
+use crate::progress::Bar;
 use crate::{CliError, Context};
+
+/// Which columns of a data file to read, and how.
+#[derive(Debug, Clone, clap::Args)]
+pub struct ColumnArgs {
+    /// Column of the drive voltage (the stage's input), by 1-based index or header name (a
+    /// variable name, or name:k for column k of a matrix, in a .mat file).
+    #[arg(long, alias = "input-column", value_name = "COLUMN")]
+    pub voltage_column: Column,
+    /// Column of the measured displacement (the stage's output), by 1-based index or name.
+    #[arg(long, alias = "output-column", value_name = "COLUMN")]
+    pub displacement_column: Column,
+    /// Optional time column (s): checked to increase, and used by --warmup-seconds.
+    #[arg(long, value_name = "COLUMN")]
+    pub time_column: Option<Column>,
+    /// Field delimiter of text files: auto, comma, tab, semicolon or whitespace.
+    #[arg(long, default_value = "auto")]
+    pub delimiter: Delimiter,
+    /// Whether text files start with column names: auto, present or absent.
+    #[arg(long, default_value = "auto")]
+    pub header: Header,
+    /// Rows to read, 1-based and inclusive: FIRST..LAST, FIRST.., ..LAST (or FIRST:LAST).
+    #[arg(long, value_name = "FIRST..LAST", value_parser = parse_rows)]
+    pub rows: Option<RowRange>,
+    /// Multiply the voltage column by this to get volts (or --voltage-unit), e.g. 15 for
+    /// a 15x amplifier when the column holds the DAC command.
+    #[arg(
+        long,
+        default_value_t = 1.0,
+        value_name = "FACTOR",
+        allow_hyphen_values = true
+    )]
+    pub voltage_factor: f64,
+    /// Multiply the displacement column by this to get --displacement-unit, e.g. 10 for a
+    /// sensor of 10 um/V.
+    #[arg(
+        long,
+        default_value_t = 1.0,
+        value_name = "FACTOR",
+        allow_hyphen_values = true
+    )]
+    pub displacement_factor: f64,
+    /// Unit of the (scaled) voltage, written to the model file.
+    #[arg(long, default_value = "V", value_name = "UNIT")]
+    pub voltage_unit: String,
+    /// Unit of the (scaled) displacement, written to the model file.
+    #[arg(long, default_value = "um", value_name = "UNIT")]
+    pub displacement_unit: String,
+    /// Sample rate (Hz) for --warmup-seconds when there is no time column.
+    #[arg(long, value_name = "HZ")]
+    pub sample_rate: Option<f64>,
+}
+
+/// How the model is identified (shared by `identify` and `crossval`).
+#[derive(Debug, Clone, clap::Args)]
+pub struct FitArgs {
+    /// Solver: ls (constrained least squares, the exact optimum for the thresholds) or pso
+    /// (particle swarm, as the paper).
+    #[arg(long, default_value = "ls", value_parser = ["ls", "pso"])]
+    pub method: String,
+    /// Number of play operators n; thresholds (i - 1)/n of the input range (eq. (11)).
+    #[arg(
+        short = 'n',
+        long = "operators",
+        default_value_t = 10,
+        value_name = "N"
+    )]
+    pub operators: usize,
+    /// Thresholds given explicitly, comma-separated fractions of the input range in [0, 1),
+    /// strictly increasing (instead of -n), e.g. 0,0.1,0.25,0.5.
+    #[arg(
+        long,
+        value_name = "R1,R2,...",
+        value_delimiter = ',',
+        conflicts_with = "operators"
+    )]
+    pub thresholds: Option<Vec<f64>>,
+    /// Samples at the start excluded from the fit (the operators still run over them): a
+    /// number, or auto (up to the first sample within 5 % of the voltage range from its
+    /// minimum, where the model's memory no longer depends on the unknown history).
+    #[arg(long, default_value = "auto", value_name = "N|auto", value_parser = parse_warmup)]
+    pub warmup: Warmup,
+    /// Warm-up in seconds instead (needs --time-column or --sample-rate).
+    #[arg(long, value_name = "SECONDS", conflicts_with = "warmup")]
+    pub warmup_seconds: Option<f64>,
+    /// Output offset of the model (the displacement for a plant model, the voltage for an
+    /// inverse one): fit (a fitted constant, for sensors with an arbitrary zero), none (the
+    /// output's minimum is its zero) or a value in the output's unit.
+    #[arg(long, default_value = "fit", value_name = "fit|none|VALUE", value_parser = parse_offset, allow_hyphen_values = true)]
+    pub offset: OutputOffset,
+    /// Smallest branch slope the model keeps (normalised: output range per input range).
+    #[arg(long, default_value_t = hystcomp_identify::DEFAULT_MARGIN, value_name = "SLOPE")]
+    pub margin: f64,
+    /// Largest condition number of the column-scaled regressors accepted.
+    #[arg(long, default_value_t = hystcomp_identify::DEFAULT_MAX_CONDITION, value_name = "K")]
+    pub max_condition: f64,
+    /// pso: seed of the random numbers (the result is reproducible).
+    #[arg(long, default_value_t = 0)]
+    pub seed: u64,
+    /// pso: number of particles.
+    #[arg(long, default_value_t = 40, value_name = "N")]
+    pub particles: usize,
+    /// pso: number of iterations.
+    #[arg(long, default_value_t = 200, value_name = "N")]
+    pub iterations: usize,
+    /// pso: inertia weight at the first and last iteration, START,END (linear in between).
+    #[arg(long, value_name = "START,END", value_delimiter = ',', num_args = 2)]
+    pub inertia: Option<Vec<f64>>,
+    /// pso: cognitive acceleration c1.
+    #[arg(long, default_value_t = hystcomp_identify::CONSTRICTION_ACCELERATION)]
+    pub c1: f64,
+    /// pso: social acceleration c2.
+    #[arg(long, default_value_t = hystcomp_identify::CONSTRICTION_ACCELERATION)]
+    pub c2: f64,
+    /// pso: velocity clamp, a fraction of each parameter's search width.
+    #[arg(long, default_value_t = 0.2, value_name = "FRACTION")]
+    pub velocity_clamp: f64,
+    /// pso: search bound B: a1, a2 and every b_i in [-B, B] (normalised units).
+    #[arg(long, default_value_t = 3.0, value_name = "B")]
+    pub bound: f64,
+    /// pso: weight of the constraint violation added to the RMS error.
+    #[arg(long, default_value_t = 10.0)]
+    pub penalty: f64,
+    /// pso: polish the best particle by least squares on the constraints it leaves active.
+    #[arg(long)]
+    pub polish: bool,
+}
 
 /// Arguments of `hystcomp identify`.
 #[derive(Debug, clap::Args)]
-pub struct Args {}
+pub struct Args {
+    /// Measured record: delimited text (CSV, tab or whitespace separated, with or without a
+    /// header) or a MATLAB Level-5 .mat file.
+    #[arg(long, value_name = "FILE")]
+    pub data: PathBuf,
+    #[command(flatten)]
+    pub columns: ColumnArgs,
+    /// plant: voltage in, displacement out (for IHC and WIHC). inverse: displacement in,
+    /// voltage out (for DIHC). The columns are named the same way in both cases.
+    #[arg(long, default_value = "plant", value_parser = parse_direction)]
+    pub direction: Direction,
+    #[command(flatten)]
+    pub fit: FitArgs,
+    /// Fraction of the samples after the warm-up, at the end, held out of the fit and
+    /// reported separately, in [0, 1).
+    #[arg(long, default_value_t = 0.2, value_name = "FRACTION")]
+    pub holdout: f64,
+    /// Where to write the model file (JSON, written atomically).
+    #[arg(short, long, value_name = "MODEL.json")]
+    pub output: PathBuf,
+}
+
+fn parse_rows(text: &str) -> Result<RowRange, String> {
+    let text = if !text.contains("..") {
+        text.replacen(':', "..", 1)
+    } else {
+        text.to_owned()
+    };
+    text.parse().map_err(|e: data::DataError| e.to_string())
+}
+
+fn parse_warmup(text: &str) -> Result<Warmup, String> {
+    if text.trim().eq_ignore_ascii_case("auto") {
+        return Ok(Warmup::Auto);
+    }
+    text.trim()
+        .parse::<usize>()
+        .map(Warmup::Samples)
+        .map_err(|_| format!("expected a number of samples or auto, got {text:?}"))
+}
+
+fn parse_offset(text: &str) -> Result<OutputOffset, String> {
+    match text.trim().to_ascii_lowercase().as_str() {
+        "fit" => Ok(OutputOffset::Fit),
+        "none" => Ok(OutputOffset::None),
+        other => other
+            .parse::<f64>()
+            .ok()
+            .filter(|v| v.is_finite())
+            .map(OutputOffset::Value)
+            .ok_or_else(|| format!("expected fit, none or a number, got {text:?}")),
+    }
+}
+
+fn parse_direction(text: &str) -> Result<Direction, String> {
+    match text.trim().to_ascii_lowercase().as_str() {
+        "plant" => Ok(Direction::Plant),
+        "inverse" => Ok(Direction::Inverse),
+        _ => Err(format!("expected plant or inverse, got {text:?}")),
+    }
+}
+
+/// One record read from a file.
+#[derive(Debug)]
+pub struct Loaded {
+    /// Voltage samples (scaled by the factor).
+    pub voltage: Vec<f64>,
+    /// Displacement samples (scaled by the factor).
+    pub displacement: Vec<f64>,
+    /// Time samples, if a time column was given.
+    pub time: Option<Vec<f64>>,
+    /// The columns' names as the file gives them.
+    pub names: Vec<String>,
+}
+
+/// Reads the voltage, displacement and (optional) time columns of `path`, with the file's
+/// name in every message; checks that time increases.
+pub fn load(
+    path: &Path,
+    columns: &ColumnArgs,
+    voltage_column: &Column,
+    displacement_column: &Column,
+    time_column: Option<&Column>,
+    rows: Option<RowRange>,
+) -> Result<Loaded, CliError> {
+    for (what, factor) in [
+        ("--voltage-factor", columns.voltage_factor),
+        ("--displacement-factor", columns.displacement_factor),
+    ] {
+        if !(factor.is_finite() && factor != 0.0) {
+            return Err(CliError::input(format!(
+                "{what} {factor} is not usable: give a finite, non-zero factor"
+            )));
+        }
+    }
+    let mut selection = vec![voltage_column.clone(), displacement_column.clone()];
+    if let Some(t) = time_column {
+        selection.push(t.clone());
+    }
+    let options = ReadOptions {
+        delimiter: columns.delimiter,
+        header: columns.header,
+        rows,
+    };
+    let read = data::read_columns(path, &selection, &options)?;
+    let names = read.names.clone();
+    let mut values = read.values.into_iter();
+    let voltage: Vec<f64> = values
+        .next()
+        .unwrap_or_default()
+        .into_iter()
+        .map(|v| v * columns.voltage_factor)
+        .collect();
+    let displacement: Vec<f64> = values
+        .next()
+        .unwrap_or_default()
+        .into_iter()
+        .map(|v| v * columns.displacement_factor)
+        .collect();
+    for (what, name, values) in [
+        ("voltage", &names[0], &voltage),
+        ("displacement", &names[1], &displacement),
+    ] {
+        let label = if name == what {
+            what.to_owned()
+        } else {
+            format!("{what} ({name})")
+        };
+        data::check_not_constant(&label, values)
+            .map_err(|e| CliError::from(e).context(path.display()))?;
+    }
+    let time = values.next();
+    if let Some(time) = &time {
+        data::check_time_increasing(time).map_err(|e| {
+            CliError::from(e).context(format!("{}, time column {}", path.display(), names[2]))
+        })?;
+    }
+    Ok(Loaded {
+        voltage,
+        displacement,
+        time,
+        names,
+    })
+}
+
+impl FitArgs {
+    /// The identification options these arguments describe.
+    pub fn options(
+        &self,
+        columns: &ColumnArgs,
+        direction: Direction,
+        holdout: f64,
+        loaded: &Loaded,
+    ) -> Result<IdentifyOptions, CliError> {
+        let method = match self.method.as_str() {
+            "pso" => {
+                let mut pso = PsoOptions::default()
+                    .with_particles(self.particles)?
+                    .with_iterations(self.iterations)?
+                    .with_acceleration(self.c1, self.c2)?
+                    .with_velocity_clamp(self.velocity_clamp)?
+                    .with_penalty(self.penalty)?
+                    .with_seed(self.seed)
+                    .with_polish(self.polish);
+                if let Some(inertia) = &self.inertia {
+                    pso = pso.with_inertia(inertia[0], inertia[1])?;
+                }
+                let b = self.bound;
+                pso = pso.with_bounds(PsoBounds {
+                    cubic: [-b, b],
+                    linear: [-b, b],
+                    weights: [-b, b],
+                    ..PsoBounds::default()
+                })?;
+                Method::ParticleSwarm(pso)
+            }
+            _ => Method::LeastSquares,
+        };
+        let thresholds = match &self.thresholds {
+            Some(values) => Thresholds::Given(values.clone()),
+            None => Thresholds::Uniform(self.operators),
+        };
+        let warmup = match self.warmup_seconds {
+            Some(seconds) => Warmup::Samples(warmup_samples(seconds, columns, loaded)?),
+            None => self.warmup,
+        };
+        let options = IdentifyOptions {
+            direction,
+            method,
+            thresholds,
+            warmup,
+            holdout,
+            offset: self.offset,
+            margin: self.margin,
+            max_condition: self.max_condition,
+            voltage_unit: columns.voltage_unit.clone(),
+            displacement_unit: columns.displacement_unit.clone(),
+        };
+        options.validate()?;
+        Ok(options)
+    }
+
+    /// Whether a progress bar is worth drawing (only the swarm iterates).
+    pub fn iterates(&self) -> bool {
+        self.method == "pso"
+    }
+}
+
+/// The number of samples within `seconds` of the first, from the time column or the rate.
+fn warmup_samples(seconds: f64, columns: &ColumnArgs, loaded: &Loaded) -> Result<usize, CliError> {
+    if !(seconds.is_finite() && seconds >= 0.0) {
+        return Err(CliError::input(format!(
+            "--warmup-seconds {seconds} is not usable: give a duration >= 0"
+        )));
+    }
+    if let Some(time) = &loaded.time {
+        let t0 = time.first().copied().unwrap_or(0.0);
+        return Ok(time
+            .iter()
+            .position(|&t| t - t0 >= seconds)
+            .unwrap_or(time.len()));
+    }
+    match columns.sample_rate {
+        Some(rate) if rate.is_finite() && rate > 0.0 => Ok((seconds * rate).ceil() as usize),
+        Some(rate) => Err(CliError::input(format!(
+            "--sample-rate {rate} is not usable: give a rate > 0 in Hz"
+        ))),
+        None => Err(CliError::input(
+            "--warmup-seconds needs a time column (--time-column) or --sample-rate; or give \
+             the warm-up in samples with --warmup",
+        )),
+    }
+}
+
+#[derive(Serialize)]
+struct Output<'a> {
+    data: String,
+    output: String,
+    columns: &'a [String],
+    report: &'a hystcomp_identify::FitReport,
+    model: &'a hystcomp_io::model_file::ModelFile,
+}
+
+/// Prints a fit report for people.
+pub fn print_fit(report: &hystcomp_identify::FitReport) {
+    let unit = &report.output.unit;
+    let s = &report.samples;
+    println!(
+        "  samples: {} in the record, {} warm-up, {} fitted, {} held out",
+        s.total, s.warmup, s.fit, s.holdout
+    );
+    println!(
+        "  {} {} .. {} {} -> {} {} .. {} {} ({} operators, condition number {:.3e})",
+        report.input.quantity,
+        report.input.min,
+        report.input.max,
+        report.input.unit,
+        report.output.quantity,
+        report.output.min,
+        report.output.max,
+        unit,
+        report.thresholds.len(),
+        report.condition_number
+    );
+    println!(
+        "  fit:      RMS {:.4} % ({:.4} {unit}), max {:.4} % ({:.4} {unit}) of the output range",
+        report.fit.rms_percent, report.fit.rms, report.fit.max_percent, report.fit.max
+    );
+    if let Some(h) = &report.holdout {
+        println!(
+            "  held out: RMS {:.4} % ({:.4} {unit}), max {:.4} % ({:.4} {unit})",
+            h.rms_percent, h.rms, h.max_percent, h.max
+        );
+    }
+    println!(
+        "  solver: {} ({}), {} of {} constraints active, smallest branch slope {:.4} \
+         (margin {}), {:.1} ms",
+        report.solver,
+        report.detail,
+        report.active_constraints,
+        report.constraints,
+        report.min_branch_slope,
+        report.margin,
+        report.elapsed_s * 1e3
+    );
+}
 
 /// Runs `hystcomp identify`.
-pub fn run(_args: &Args, _ctx: Context) -> Result<(), CliError> {
-    Err(CliError::input("`hystcomp identify` is not implemented yet"))
+pub fn run(args: &Args, ctx: Context) -> Result<(), CliError> {
+    let c = &args.columns;
+    let loaded = load(
+        &args.data,
+        c,
+        &c.voltage_column,
+        &c.displacement_column,
+        c.time_column.as_ref(),
+        c.rows,
+    )?;
+    let options = args.fit.options(c, args.direction, args.holdout, &loaded)?;
+    let mut bar = if args.fit.iterates() {
+        Bar::new("identifying", args.fit.iterations as u64)
+    } else {
+        Bar::hidden()
+    };
+    let fit = identify_observed(&loaded.voltage, &loaded.displacement, &options, &mut bar)
+        .map_err(|e| CliError::from(e).context(args.data.display()))?;
+    bar.finish();
+    let mut model = fit.model.clone();
+    if let Some(serde_json::Value::Object(map)) = &mut model.identification {
+        map.insert(
+            "data".to_owned(),
+            serde_json::Value::String(args.data.display().to_string()),
+        );
+        map.insert(
+            "columns".to_owned(),
+            serde_json::Value::from(loaded.names.clone()),
+        );
+    }
+    model
+        .save(&args.output)
+        .map_err(|e| CliError::output(e.to_string()))?;
+    if ctx.json {
+        let output = Output {
+            data: args.data.display().to_string(),
+            output: args.output.display().to_string(),
+            columns: &loaded.names,
+            report: &fit.report,
+            model: &model,
+        };
+        println!(
+            "{}",
+            serde_json::to_string_pretty(&output).map_err(|e| CliError::output(e.to_string()))?
+        );
+    } else {
+        println!(
+            "{} model identified from {} -> {}",
+            args.direction,
+            args.data.display(),
+            args.output.display()
+        );
+        print_fit(&fit.report);
+    }
+    Ok(())
 }
