@@ -132,7 +132,9 @@ pub fn identify_observed(
         fit_offset,
         options.margin,
     )?;
-    if !(problem.condition_number() <= options.max_condition) {
+    // NaN counts as ill-conditioned too.
+    let condition = problem.condition_number();
+    if condition.is_nan() || condition > options.max_condition {
         return Err(IdentifyError::IllConditioned {
             condition: problem.condition_number(),
             limit: options.max_condition,

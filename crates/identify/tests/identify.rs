@@ -1,7 +1,7 @@
 //! Identification on seeded random synthetic records: exact recovery, optimality under the
 //! constraints, the two solvers of one problem, the core's checks, reports and errors.
 
-use hystcomp_core::{Compensator, Dihc, Ihc, Mpim, OutputLimits, SolveMode, Wihc};
+use hystcomp_core::{Dihc, Ihc, Mpim, OutputLimits, SolveMode, Wihc};
 use hystcomp_identify::{
     CrossvalOptions, FitProblem, IdentifyError, IdentifyOptions, LeastSquares, Method, NoObserver,
     OutputOffset, ParticleSwarm, ProblemData, PsoOptions, Record, Solver, Thresholds, Warmup,

@@ -1,0 +1,268 @@
+//! `hystcomp crossval` through the binary: synthetic records with a known answer, per-file
+//! column options, the real DBO records (skipped when absent), and bad input.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+use hystcomp_core::Mpim;
+use hystcomp_io::model_file::{Direction, ModelFile};
+use serde_json::Value;
+
+const BIN: &str = env!("CARGO_BIN_EXE_hystcomp");
+const DBO: &str = concat!(
+    env!("CARGO_MANIFEST_DIR"),
+    "/../../../shared/data/dbo-micromanipulator/"
+);
+
+fn hystcomp(args: &[&str]) -> Output {
+    Command::new(BIN)
+        .args(args)
+        .output()
+        .expect("the binary runs")
+}
+
+fn stderr(output: &Output) -> String {
+    String::from_utf8_lossy(&output.stderr).into_owned()
+}
+
+/// Table 1 driven by `voltage` (0..10 V), in um with an offset of 5 um.
+fn displacement(voltage: &[f64]) -> Vec<f64> {
+    let thresholds = [0.0, 0.1, 0.2, 0.3, 0.4, 0.5, 0.6, 0.7, 0.8, 0.9];
+    let weights = [
+        0.2313, 0.3059, 0.0155, 0.0752, 0.0683, 0.0252, 0.0035, 0.0094, 0.0264, 0.0032,
+    ];
+    let mut plant: Mpim<f64, Vec<f64>> = Mpim::new(&thresholds, &weights, -0.1569, 0.4603).unwrap();
+    voltage
+        .iter()
+        .map(|v| 5.0 + 75.0 * plant.step(v / 10.0))
+        .collect()
+}
+
+/// Voltage and displacement samples of one record.
+type Pair = (Vec<f64>, Vec<f64>);
+
+/// A decaying 1 Hz cycle from 0 to 10 V (training) and, for testing, the paper's three-tone
+/// trajectory shape mapped into 1..9 V after a ramp up from 0 V.
+fn records() -> (Pair, Pair) {
+    let train: Vec<f64> = (0..4000)
+        .map(|k| {
+            let t = k as f64 / 200.0;
+            // Exactly 0 to 10 V in the first cycle (the thresholds of Table 1), then decaying.
+            let envelope = (-(t - 0.5).max(0.0) / 12.0).exp();
+            5.0 - 5.0 * envelope * (2.0 * std::f64::consts::PI * t).cos()
+        })
+        .collect();
+    let mut test: Vec<f64> = (0..100).map(|k| k as f64 / 100.0 * 5.0).collect();
+    test.extend((0..2000).map(|k| {
+        let t = k as f64 / 200.0;
+        let pi = std::f64::consts::PI;
+        let s = 10.5 * (pi * t + 2.6).sin()
+            + 10.5 * (1.6 * pi * t + 3.0).sin()
+            + 15.75 * (2.0 * pi * t + 1.5).sin();
+        5.0 + 4.0 * s / 36.75
+    }));
+    let (y_train, y_test) = (displacement(&train), displacement(&test));
+    ((train, y_train), (test, y_test))
+}
+
+fn write_csv(path: &Path, names: &[&str], columns: &[&[f64]]) {
+    let mut text = names.join(",") + "\n";
+    for r in 0..columns[0].len() {
+        let row: Vec<String> = columns.iter().map(|c| format!("{:?}", c[r])).collect();
+        text.push_str(&row.join(","));
+        text.push('\n');
+    }
+    std::fs::write(path, text).unwrap();
+}
+
+fn files(dir: &Path) -> (PathBuf, PathBuf) {
+    let ((v, y), (tv, ty)) = records();
+    let train = dir.join("train.csv");
+    let test = dir.join("test.csv");
+    write_csv(&train, &["volts", "um"], &[&v, &y]);
+    // The test file has its columns the other way round, and one more.
+    let zeros = vec![0.0; tv.len()];
+    write_csv(&test, &["um", "volts", "spare"], &[&ty, &tv, &zeros]);
+    (train, test)
+}
+
+#[test]
+fn exact_compensators_replay_a_noise_free_test_record_exactly() {
+    let dir = tempfile::tempdir().unwrap();
+    let (train, test) = files(dir.path());
+    let plant_path = dir.path().join("plant.json");
+    let inverse_path = dir.path().join("inverse.json");
+    let out = hystcomp(&[
+        "--json",
+        "crossval",
+        "--train",
+        train.to_str().unwrap(),
+        "--test",
+        test.to_str().unwrap(),
+        "--voltage-column",
+        "volts",
+        "--displacement-column",
+        "um",
+        "--test-warmup",
+        "0",
+        "--save-plant",
+        plant_path.to_str().unwrap(),
+        "--save-inverse",
+        inverse_path.to_str().unwrap(),
+    ]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let doc: Value = serde_json::from_slice(&out.stdout).expect("one JSON document");
+    let test_report = &doc["report"]["test"];
+    assert_eq!(test_report["samples"], 2100);
+    assert_eq!(test_report["warmup"], 0);
+    assert!(test_report["forward"]["rms_percent"].as_f64().unwrap() < 1e-6);
+    let replay = test_report["replay"].as_array().unwrap();
+    let names: Vec<&str> = replay
+        .iter()
+        .map(|r| r["compensator"].as_str().unwrap())
+        .collect();
+    assert_eq!(
+        names,
+        ["ihc", "ihc-delayed", "wihc", "wihc-delayed", "dihc"]
+    );
+    for r in replay {
+        let rms = r["error"]["rms_percent"].as_f64().unwrap();
+        let max = r["error"]["max_percent"].as_f64().unwrap();
+        match r["compensator"].as_str().unwrap() {
+            // The identified plant model is exact: its exact inverses return the voltage.
+            "ihc" | "wihc" => assert!(max < 1e-6, "{r}"),
+            _ => assert!(rms > 1e-6 && rms < 10.0, "{r}"),
+        }
+        // The first test sample sits exactly on the lower voltage limit: rounding may clamp it.
+        // (The delayed WIHC may ring at the start, while several operators move.)
+        if r["compensator"] != "wihc-delayed" {
+            assert!(r["saturated"].as_u64().unwrap() <= 1, "{r}");
+        }
+    }
+    let plant = ModelFile::load(&plant_path).unwrap();
+    let inverse = ModelFile::load(&inverse_path).unwrap();
+    assert_eq!(plant.direction, Direction::Plant);
+    assert_eq!(inverse.direction, Direction::Inverse);
+    assert_eq!(doc["plant_model"]["a1"].as_f64().unwrap(), plant.a1);
+}
+
+#[test]
+fn text_report_lists_every_compensator() {
+    let dir = tempfile::tempdir().unwrap();
+    let (train, test) = files(dir.path());
+    let out = hystcomp(&[
+        "crossval",
+        "--train",
+        train.to_str().unwrap(),
+        "--test",
+        test.to_str().unwrap(),
+        "--voltage-column",
+        "1",
+        "--displacement-column",
+        "2",
+        "--test-voltage-column",
+        "2",
+        "--test-displacement-column",
+        "1",
+        "--method",
+        "pso",
+        "--iterations",
+        "50",
+        "--polish",
+    ]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let text = String::from_utf8_lossy(&out.stdout);
+    for name in [
+        "ihc",
+        "ihc-delayed",
+        "wihc",
+        "wihc-delayed",
+        "dihc",
+        "forward prediction",
+    ] {
+        assert!(text.contains(name), "{name} missing from:\n{text}");
+    }
+}
+
+#[test]
+fn bad_test_files_are_refused_with_a_message_to_act_on() {
+    let dir = tempfile::tempdir().unwrap();
+    let (train, test) = files(dir.path());
+    let run = |extra: &[&str]| {
+        let mut args = vec![
+            "crossval",
+            "--train",
+            train.to_str().unwrap(),
+            "--test",
+            test.to_str().unwrap(),
+            "--voltage-column",
+            "volts",
+            "--displacement-column",
+            "um",
+        ];
+        args.extend_from_slice(extra);
+        let out = hystcomp(&args);
+        assert_eq!(out.status.code(), Some(1), "{}", stderr(&out));
+        assert!(out.stdout.is_empty());
+        stderr(&out)
+    };
+    let message = run(&["--test-voltage-column", "volt"]);
+    assert!(message.contains("\"volt\""), "{message}");
+    assert!(message.contains("\"spare\""), "{message}");
+    let message = run(&["--test-displacement-column", "spare"]);
+    assert!(message.contains("constant"), "{message}");
+    let message = run(&["--test-warmup", "99999"]);
+    assert!(message.contains("warm-up"), "{message}");
+    let message = run(&["--test-warmup", "soon"]);
+    assert!(message.contains("--test-warmup"), "{message}");
+}
+
+#[test]
+fn dbo_records_cross_validate_within_sane_bounds() {
+    let train = Path::new(DBO).join("Model_Vi_Do.dat");
+    let test = Path::new(DBO).join("Test_Vi_Do_Di.dat");
+    if !train.exists() || !test.exists() {
+        eprintln!("skipped: the DBO records are absent from {DBO}");
+        return;
+    }
+    let out = hystcomp(&[
+        "--json",
+        "crossval",
+        "--train",
+        train.to_str().unwrap(),
+        "--test",
+        test.to_str().unwrap(),
+        "--voltage-column",
+        "1",
+        "--displacement-column",
+        "5",
+    ]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let doc: Value = serde_json::from_slice(&out.stdout).unwrap();
+    let report = &doc["report"];
+    for model in ["plant", "inverse"] {
+        let fit = &report[model]["fit"];
+        eprintln!(
+            "DBO crossval (cli): {model} fit RMS {:.3} % max {:.3} %",
+            fit["rms_percent"].as_f64().unwrap(),
+            fit["max_percent"].as_f64().unwrap()
+        );
+        assert!(fit["rms_percent"].as_f64().unwrap() < 1.5);
+    }
+    let forward = &report["test"]["forward"];
+    eprintln!(
+        "DBO crossval (cli): forward RMS {:.3} % max {:.3} %",
+        forward["rms_percent"].as_f64().unwrap(),
+        forward["max_percent"].as_f64().unwrap()
+    );
+    assert!(forward["rms_percent"].as_f64().unwrap() < 5.0);
+    for r in report["test"]["replay"].as_array().unwrap() {
+        let rms = r["error"]["rms_percent"].as_f64().unwrap();
+        let max = r["error"]["max_percent"].as_f64().unwrap();
+        eprintln!(
+            "DBO crossval (cli): replay {} RMS {rms:.3} % max {max:.3} %",
+            r["compensator"]
+        );
+        assert!(rms < 3.0 && max < 10.0, "{r}");
+    }
+}

@@ -1,0 +1,450 @@
+//! `hystcomp identify` through the binary: files in every supported shape, JSON output,
+//! reproducible swarms, and every bad input with a non-zero exit and a message to act on.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+use hystcomp_core::Mpim;
+use hystcomp_io::model_file::{Direction, ModelFile};
+use serde_json::Value;
+
+const BIN: &str = env!("CARGO_BIN_EXE_hystcomp");
+
+fn hystcomp(args: &[&str]) -> Output {
+    Command::new(BIN)
+        .args(args)
+        .output()
+        .expect("the binary runs")
+}
+
+fn stderr(output: &Output) -> String {
+    String::from_utf8_lossy(&output.stderr).into_owned()
+}
+
+fn stdout(output: &Output) -> String {
+    String::from_utf8_lossy(&output.stdout).into_owned()
+}
+
+/// A synthetic record at 200 Hz from Table 1 of the paper: a decaying 1 Hz cycle between
+/// 0 and 10 V, starting at 0 V; displacement in um with a sensor offset of -40 um.
+fn record(samples: usize) -> (Vec<f64>, Vec<f64>, Vec<f64>) {
+    let thresholds = [0.0, 0.1, 0.2, 0.3, 0.4, 0.5, 0.6, 0.7, 0.8, 0.9];
+    let weights = [
+        0.2313, 0.3059, 0.0155, 0.0752, 0.0683, 0.0252, 0.0035, 0.0094, 0.0264, 0.0032,
+    ];
+    let mut plant: Mpim<f64, Vec<f64>> = Mpim::new(&thresholds, &weights, -0.1569, 0.4603).unwrap();
+    let time: Vec<f64> = (0..samples).map(|k| k as f64 / 200.0).collect();
+    let voltage: Vec<f64> = time
+        .iter()
+        .map(|t| {
+            // Full range (exactly 0 and 10 V) in the first cycle, so that the normalised
+            // thresholds are those of Table 1; then decaying.
+            let envelope = (-(t - 0.5).max(0.0) / 15.0).exp();
+            5.0 - 5.0 * envelope * (2.0 * std::f64::consts::PI * t).cos()
+        })
+        .collect();
+    let displacement = voltage
+        .iter()
+        .map(|v| -40.0 + 75.0 * plant.step(v / 10.0))
+        .collect();
+    (time, voltage, displacement)
+}
+
+/// Writes rows of numbers (and an optional header) with `delimiter`.
+fn write_table(path: &Path, header: Option<&[&str]>, columns: &[&[f64]], delimiter: &str) {
+    let mut text = String::new();
+    if let Some(names) = header {
+        text.push_str(&names.join(delimiter));
+        text.push('\n');
+    }
+    for r in 0..columns[0].len() {
+        let row: Vec<String> = columns.iter().map(|c| format!("{:?}", c[r])).collect();
+        text.push_str(&row.join(delimiter));
+        text.push('\n');
+    }
+    std::fs::write(path, text).unwrap();
+}
+
+fn csv_record(dir: &Path, samples: usize) -> PathBuf {
+    let (t, v, y) = record(samples);
+    let path = dir.join("record.csv");
+    write_table(
+        &path,
+        Some(&["time_s", "voltage_V", "position_um"]),
+        &[&t, &v, &y],
+        ",",
+    );
+    path
+}
+
+#[test]
+fn identifies_a_csv_with_a_header_by_column_names() {
+    let dir = tempfile::tempdir().unwrap();
+    let data = csv_record(dir.path(), 4000);
+    let model_path = dir.path().join("plant.json");
+    let out = hystcomp(&[
+        "identify",
+        "--data",
+        data.to_str().unwrap(),
+        "--voltage-column",
+        "voltage_V",
+        "--displacement-column",
+        "position_um",
+        "--time-column",
+        "time_s",
+        "-o",
+        model_path.to_str().unwrap(),
+    ]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    assert!(stdout(&out).contains("fit:"), "{}", stdout(&out));
+    let model = ModelFile::load(&model_path).unwrap();
+    assert_eq!(model.direction, Direction::Plant);
+    assert_eq!(model.input.unit, "V");
+    assert_eq!(model.output.unit, "um");
+    let mpim = model.model().unwrap();
+    assert!(mpim.check_invertible(0.0, 1.0).is_ok());
+    // Noise-free data from Table 1: the prediction reproduces the record.
+    let (_, v, y) = record(4000);
+    let mut m = mpim.clone();
+    for (v, y) in v.iter().zip(&y) {
+        let predicted = model.output_to_physical(m.step(model.normalise_input(*v)));
+        assert!((predicted - y).abs() < 1e-6, "{predicted} vs {y}");
+    }
+    let identification = model.identification.expect("the fit report is kept");
+    assert_eq!(identification["solver"], "ls");
+    assert!(
+        identification["data"]
+            .as_str()
+            .unwrap()
+            .ends_with("record.csv")
+    );
+}
+
+#[test]
+fn json_output_is_one_document_with_the_report() {
+    let dir = tempfile::tempdir().unwrap();
+    let (t, v, y) = record(3000);
+    // Tab-separated without a header, columns by index, as the DBO files.
+    let data = dir.path().join("record.dat");
+    write_table(&data, None, &[&v, &t, &y], "\t");
+    let model_path = dir.path().join("inverse.json");
+    let out = hystcomp(&[
+        "--json",
+        "identify",
+        "--data",
+        data.to_str().unwrap(),
+        "--voltage-column",
+        "1",
+        "--displacement-column",
+        "3",
+        "--direction",
+        "inverse",
+        "--holdout",
+        "0.25",
+        "-o",
+        model_path.to_str().unwrap(),
+    ]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let doc: Value = serde_json::from_str(&stdout(&out)).expect("stdout is one JSON document");
+    let report = &doc["report"];
+    assert_eq!(report["direction"], "inverse");
+    assert_eq!(report["input"]["quantity"], "displacement");
+    let samples = &report["samples"];
+    let total = samples["total"].as_u64().unwrap();
+    assert_eq!(total, 3000);
+    assert_eq!(
+        samples["warmup"].as_u64().unwrap()
+            + samples["fit"].as_u64().unwrap()
+            + samples["holdout"].as_u64().unwrap(),
+        total
+    );
+    assert!(report["fit"]["rms_percent"].as_f64().unwrap() < 2.0);
+    assert!(report["holdout"]["rms_percent"].as_f64().unwrap() < 2.0);
+    assert!(report["elapsed_s"].as_f64().unwrap() > 0.0);
+    let model = ModelFile::load(&model_path).unwrap();
+    assert_eq!(model.direction, Direction::Inverse);
+    assert_eq!(doc["model"]["a1"].as_f64().unwrap(), model.a1);
+    assert!(model.model().unwrap().check_invertible(0.0, 1.0).is_ok());
+}
+
+#[test]
+fn whitespace_files_row_ranges_and_warmup_seconds() {
+    let dir = tempfile::tempdir().unwrap();
+    let (t, v, y) = record(3000);
+    let data = dir.path().join("record.txt");
+    write_table(&data, Some(&["t", "u", "y"]), &[&t, &v, &y], "   ");
+    let model_path = dir.path().join("m.json");
+    let out = hystcomp(&[
+        "--json",
+        "identify",
+        "--data",
+        data.to_str().unwrap(),
+        "--voltage-column",
+        "u",
+        "--displacement-column",
+        "y",
+        "--time-column",
+        "t",
+        "--rows",
+        "101:2600",
+        "--warmup-seconds",
+        "0.5",
+        "--holdout",
+        "0",
+        "-n",
+        "6",
+        "-o",
+        model_path.to_str().unwrap(),
+    ]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let doc: Value = serde_json::from_str(&stdout(&out)).unwrap();
+    assert_eq!(doc["report"]["samples"]["total"], 2500);
+    assert_eq!(doc["report"]["samples"]["warmup"], 100); // 0.5 s at 200 Hz
+    assert_eq!(doc["report"]["thresholds"].as_array().unwrap().len(), 6);
+    assert!(doc["report"]["holdout"].is_null());
+}
+
+#[test]
+fn reads_a_matlab_level5_file_and_explains_v73() {
+    let dir = tempfile::tempdir().unwrap();
+    let fixture = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../io/tests/fixtures/scipy_record.mat"
+    );
+    let model_path = dir.path().join("m.json");
+    let out = hystcomp(&[
+        "identify",
+        "--data",
+        fixture,
+        "--voltage-column",
+        "u",
+        "--displacement-column",
+        "y",
+        "-n",
+        "1",
+        "--holdout",
+        "0",
+        "-o",
+        model_path.to_str().unwrap(),
+    ]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    assert!(ModelFile::load(&model_path).is_ok());
+
+    // A MATLAB v7.3 file is HDF5: a 512-byte text header, then the HDF5 signature.
+    let v73 = dir.path().join("record.mat");
+    let mut bytes = b"MATLAB 7.3 MAT-file, Platform: GLNXA64, Created on: Mon Jan  1 00:00:00 2024 HDF5 schema 1.00 .".to_vec();
+    bytes.resize(512, b' ');
+    bytes.extend_from_slice(b"\x89HDF\r\n\x1a\n");
+    bytes.resize(2048, 0);
+    std::fs::write(&v73, bytes).unwrap();
+    let out = hystcomp(&[
+        "identify",
+        "--data",
+        v73.to_str().unwrap(),
+        "--voltage-column",
+        "u",
+        "--displacement-column",
+        "y",
+        "-o",
+        model_path.to_str().unwrap(),
+    ]);
+    assert_eq!(out.status.code(), Some(1));
+    assert!(stderr(&out).contains("-v7"), "{}", stderr(&out));
+}
+
+#[test]
+fn the_swarm_is_reproducible_from_the_command_line() {
+    let dir = tempfile::tempdir().unwrap();
+    let data = csv_record(dir.path(), 2000);
+    let run = |name: &str, seed: &str| {
+        let path = dir.path().join(name);
+        let out = hystcomp(&[
+            "identify",
+            "--data",
+            data.to_str().unwrap(),
+            "--voltage-column",
+            "2",
+            "--displacement-column",
+            "3",
+            "--method",
+            "pso",
+            "--seed",
+            seed,
+            "--iterations",
+            "60",
+            "-o",
+            path.to_str().unwrap(),
+        ]);
+        assert!(out.status.success(), "{}", stderr(&out));
+        ModelFile::load(&path).unwrap()
+    };
+    let a = run("a.json", "7");
+    let b = run("b.json", "7");
+    let c = run("c.json", "8");
+    assert_eq!((a.a1, a.a2, &a.weights), (b.a1, b.a2, &b.weights));
+    assert_ne!((a.a1, &a.weights), (c.a1, &c.weights));
+    assert_eq!(a.identification.unwrap()["pso"]["seed"], 7);
+}
+
+/// Runs identify on `contents` (written to a file) and returns the failed output.
+fn refused(contents: &str, extra: &[&str]) -> Output {
+    let dir = tempfile::tempdir().unwrap();
+    let data = dir.path().join("bad.csv");
+    std::fs::write(&data, contents).unwrap();
+    let model_path = dir.path().join("m.json");
+    let mut args = vec![
+        "identify",
+        "--data",
+        data.to_str().unwrap(),
+        "--voltage-column",
+        "v",
+        "--displacement-column",
+        "y",
+        "-o",
+        model_path.to_str().unwrap(),
+    ];
+    args.extend_from_slice(extra);
+    let out = hystcomp(&args);
+    assert_eq!(out.status.code(), Some(1), "{}", stderr(&out));
+    assert!(!model_path.exists(), "no model file is written");
+    assert!(stdout(&out).is_empty());
+    out
+}
+
+/// A good record as CSV text with columns t, v, y, with `edit` applied to its lines.
+fn csv_text(samples: usize, edit: impl Fn(usize, String) -> String) -> String {
+    let (t, v, y) = record(samples);
+    let mut text = "t,v,y\n".to_owned();
+    for k in 0..samples {
+        text.push_str(&edit(k, format!("{:?},{:?},{:?}", t[k], v[k], y[k])));
+        text.push('\n');
+    }
+    text
+}
+
+#[test]
+fn bad_inputs_are_refused_with_a_message_to_act_on() {
+    // Ragged rows.
+    let out = refused(
+        &csv_text(
+            500,
+            |k, line| {
+                if k == 40 { format!("{line},9") } else { line }
+            },
+        ),
+        &[],
+    );
+    assert!(stderr(&out).contains("line 42"), "{}", stderr(&out));
+    assert!(stderr(&out).contains("same number of fields"));
+
+    // NaN and infinite values.
+    let out = refused(
+        &csv_text(500, |k, line| {
+            if k == 10 {
+                "0.05,NaN,1.0".to_owned()
+            } else {
+                line
+            }
+        }),
+        &[],
+    );
+    assert!(
+        stderr(&out).contains("not a finite number"),
+        "{}",
+        stderr(&out)
+    );
+    let out = refused(
+        &csv_text(500, |k, line| {
+            if k == 10 {
+                "0.05,1.0,inf".to_owned()
+            } else {
+                line
+            }
+        }),
+        &[],
+    );
+    assert!(
+        stderr(&out).contains("not a finite number"),
+        "{}",
+        stderr(&out)
+    );
+
+    // Non-increasing time.
+    let out = refused(
+        &csv_text(500, |k, line| {
+            if k == 20 {
+                line.replacen("0.1,", "0.09,", 1)
+            } else {
+                line
+            }
+        }),
+        &["--time-column", "t"],
+    );
+    assert!(
+        stderr(&out).contains("time is not increasing"),
+        "{}",
+        stderr(&out)
+    );
+
+    // Constant input, constant output.
+    let flat_v = csv_text(500, |k, _| format!("{},2.5,{}", k as f64 / 200.0, k % 7));
+    let out = refused(&flat_v, &[]);
+    assert!(stderr(&out).contains("voltage"), "{}", stderr(&out));
+    assert!(stderr(&out).contains("constant"));
+    let flat_y = csv_text(500, |k, _| format!("{},{},-3", k as f64 / 200.0, k % 7));
+    let out = refused(&flat_y, &[]);
+    assert!(stderr(&out).contains("displacement"), "{}", stderr(&out));
+    assert!(stderr(&out).contains("constant"));
+
+    // Too few samples: says how many are needed.
+    let out = refused(&csv_text(20, |_, line| line), &[]);
+    assert!(
+        stderr(&out).contains("at least 36 needed"),
+        "{}",
+        stderr(&out)
+    );
+
+    // A column that does not exist: names the ones that do.
+    let out = refused(
+        &csv_text(500, |_, line| line),
+        &["--time-column", "seconds"],
+    );
+    let message = stderr(&out);
+    assert!(message.contains("\"seconds\""), "{message}");
+    assert!(message.contains("\"t\"") && message.contains("\"v\"") && message.contains("\"y\""));
+
+    // Options that cannot be used.
+    let out = refused(&csv_text(500, |_, line| line), &["--holdout", "1.5"]);
+    assert!(stderr(&out).contains("holdout"), "{}", stderr(&out));
+    let out = refused(
+        &csv_text(500, |_, line| line),
+        &["--thresholds", "0,0.5,0.4"],
+    );
+    assert!(
+        stderr(&out).contains("increase strictly"),
+        "{}",
+        stderr(&out)
+    );
+    let out = refused(&csv_text(500, |_, line| line), &["--warmup-seconds", "1"]);
+    assert!(stderr(&out).contains("--sample-rate"), "{}", stderr(&out));
+}
+
+#[test]
+fn an_unwritable_model_path_is_an_output_error() {
+    let dir = tempfile::tempdir().unwrap();
+    let data = csv_record(dir.path(), 1000);
+    let model_path = dir.path().join("no such folder").join("m.json");
+    let out = hystcomp(&[
+        "identify",
+        "--data",
+        data.to_str().unwrap(),
+        "--voltage-column",
+        "2",
+        "--displacement-column",
+        "3",
+        "-o",
+        model_path.to_str().unwrap(),
+    ]);
+    assert_eq!(out.status.code(), Some(3), "{}", stderr(&out));
+    assert!(stderr(&out).contains("m.json"));
+}
