@@ -68,3 +68,8 @@ pub use mpim::Mpim;
 pub use play::{OneSidedPlay, SymmetricPlay};
 pub use real::Real;
 pub use wihc::Wihc;
+
+/// The Rust examples of the README, run as doctests so that they stay true.
+#[cfg(doctest)]
+#[doc = include_str!("../../../README.md")]
+pub struct ReadmeDoctests;

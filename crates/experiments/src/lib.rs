@@ -7,12 +7,17 @@
 //! compensators come from `hystcomp-core`, identification from `hystcomp-identify` and the stage
 //! from `hystcomp-stage`.
 
+pub mod excitation;
 pub mod figures;
 pub mod indices;
 pub mod reference;
 pub mod report;
+pub mod study;
+pub mod study_report;
 pub mod trajectory;
 
 pub use indices::{IndexError, TrackingIndices};
 pub use reference::Reference;
+pub use study::{run_study, Study, StudyError, StudyObserver, StudyOptions};
+pub use study_report::{summarize, write_outputs, RunMeta, StudySummary};
 pub use trajectory::MultisineTrajectory;
