@@ -1,0 +1,214 @@
+//! `hystcomp reproduce` and `hystcomp evaluate` through the built binary.
+
+use std::path::Path;
+use std::process::{Command, Output};
+
+fn hystcomp(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_hystcomp"))
+        .args(args)
+        .output()
+        .expect("the hystcomp binary runs")
+}
+
+fn stderr(o: &Output) -> String {
+    String::from_utf8_lossy(&o.stderr).into_owned()
+}
+
+fn s(p: &Path) -> &str {
+    p.to_str().unwrap()
+}
+
+#[test]
+fn reproduce_prints_table3_writes_the_report_and_honours_json() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("report");
+    let o = hystcomp(&["reproduce", "--out", s(&out), "--pso-iterations", "30"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let text = String::from_utf8_lossy(&o.stdout);
+    assert!(
+        text.contains("Table 3") && text.contains("e_rms") && text.contains("published"),
+        "{text}"
+    );
+    assert!(out.join("index.html").is_file());
+    assert!(out.join("fig07_uncompensated.png").is_file());
+    assert!(out.join("models/exact-plant.json").is_file());
+
+    let o = hystcomp(&[
+        "reproduce",
+        "--out",
+        s(&out),
+        "--pso-iterations",
+        "30",
+        "--json",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let json: serde_json::Value = serde_json::from_slice(&o.stdout).expect("one JSON document");
+    let pipelines = json["pipelines"].as_array().unwrap();
+    assert_eq!(pipelines.len(), 2);
+    for p in pipelines {
+        assert_eq!(p["runs"].as_array().unwrap().len(), 3);
+    }
+    let published = json["published"]["ihc"]["e_rms"].as_f64().unwrap();
+    assert_eq!(published, 0.75);
+    // The same numbers as the study file beside the report.
+    let file: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("study.json")).unwrap()).unwrap();
+    assert_eq!(file["pipelines"], json["pipelines"]);
+}
+
+#[test]
+fn reproduce_runs_on_a_stage_file_and_refuses_a_bad_one() {
+    let dir = tempfile::tempdir().unwrap();
+    let stage = dir.path().join("stage.toml");
+    std::fs::write(&stage, "[mechanics]\nresonance_hz = 600.0\n").unwrap();
+    let out = dir.path().join("r");
+    let o = hystcomp(&[
+        "reproduce",
+        "--stage",
+        s(&stage),
+        "--out",
+        s(&out),
+        "--pso-iterations",
+        "10",
+        "--json",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(std::fs::read_to_string(out.join("index.html"))
+        .unwrap()
+        .contains("resonance_hz = 600.0"));
+
+    std::fs::write(&stage, "[mechanics]\ndamping_ratio = -1.0\n").unwrap();
+    let o = hystcomp(&["reproduce", "--stage", s(&stage), "--out", s(&out)]);
+    assert!(!o.status.success());
+    assert!(stderr(&o).contains("damping_ratio"), "{}", stderr(&o));
+    let o = hystcomp(&["reproduce", "--stage", "/no/such/stage.toml"]);
+    assert!(!o.status.success());
+    assert!(stderr(&o).contains("/no/such/stage.toml"), "{}", stderr(&o));
+    let o = hystcomp(&["reproduce", "--periods", "1", "--out", s(&out)]);
+    assert!(!o.status.success());
+    assert!(stderr(&o).contains("at least 2 periods"), "{}", stderr(&o));
+}
+
+#[test]
+fn evaluate_computes_the_three_indices_and_refuses_bad_records() {
+    let dir = tempfile::tempdir().unwrap();
+    // y follows y_d up and y_d + 1 down: a loop 1 wide on a range of 10.
+    let n = 2000;
+    let time: Vec<f64> = (0..n).map(|k| k as f64 * 1e-3).collect();
+    let desired: Vec<f64> = (0..n)
+        .map(|k| {
+            if k < n / 2 {
+                k as f64 / (n / 2) as f64 * 10.0
+            } else {
+                (n - k) as f64 / (n / 2) as f64 * 10.0
+            }
+        })
+        .collect();
+    let measured: Vec<f64> = desired
+        .iter()
+        .enumerate()
+        .map(|(k, d)| if k < n / 2 { *d } else { d + 1.0 })
+        .collect();
+    let file = dir.path().join("run.csv");
+    hystcomp_io::data::write_csv(&file, &["t", "yd", "y"], &[&time, &desired, &measured]).unwrap();
+    let o = hystcomp(&[
+        "evaluate",
+        "--desired",
+        s(&file),
+        "--measured",
+        s(&file),
+        "--measured-column",
+        "y",
+        "--json",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let json: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    let e_m = json["e_m_percent"].as_f64().unwrap();
+    let e_mhe = json["e_mhe_percent"].as_f64().unwrap();
+    assert!((e_m - 10.0).abs() < 1e-9, "{json}");
+    assert!((10.0..=11.0 + 1e-9).contains(&e_mhe), "{json}");
+    assert_eq!(json["samples"], 2000);
+    // A window of rows.
+    let o = hystcomp(&[
+        "evaluate",
+        "--desired",
+        s(&file),
+        "--measured",
+        s(&file),
+        "--measured-column",
+        "3",
+        "--rows",
+        "1..1000",
+        "--json",
+    ]);
+    let json: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert_eq!(json["e_m_percent"].as_f64().unwrap(), 0.0, "{json}");
+
+    let fails = |args: &[&str], needle: &str| {
+        let o = hystcomp(args);
+        assert!(!o.status.success(), "{args:?} should fail");
+        assert!(
+            stderr(&o).contains(needle),
+            "expected {needle:?} in {}",
+            stderr(&o)
+        );
+    };
+    let short = dir.path().join("short.csv");
+    hystcomp_io::data::write_csv(&short, &["t", "y"], &[&time[..10], &desired[..10]]).unwrap();
+    fails(
+        &["evaluate", "--desired", s(&file), "--measured", s(&short)],
+        "equal length",
+    );
+    let constant = dir.path().join("constant.csv");
+    hystcomp_io::data::write_csv(&constant, &["t", "y"], &[&time[..10], &[3.0; 10]]).unwrap();
+    fails(
+        &[
+            "evaluate",
+            "--desired",
+            s(&constant),
+            "--measured",
+            s(&constant),
+        ],
+        "constant",
+    );
+    let nan = dir.path().join("nan.csv");
+    std::fs::write(&nan, "t,y\n0,1\n1,NaN\n2,3\n").unwrap();
+    fails(
+        &["evaluate", "--desired", s(&nan), "--measured", s(&nan)],
+        "NaN",
+    );
+    fails(
+        &[
+            "evaluate",
+            "--desired",
+            "/no/file.csv",
+            "--measured",
+            s(&file),
+        ],
+        "/no/file.csv",
+    );
+    fails(
+        &[
+            "evaluate",
+            "--desired",
+            s(&file),
+            "--measured",
+            s(&file),
+            "--measured-column",
+            "nope",
+        ],
+        "no column named",
+    );
+    fails(
+        &[
+            "evaluate",
+            "--desired",
+            s(&file),
+            "--measured",
+            s(&file),
+            "--bins",
+            "0",
+        ],
+        "bin",
+    );
+}
