@@ -122,18 +122,36 @@ pub enum HysteresisModel {
     Preisach,
     /// An asymmetric Bouc-Wen model.
     BoucWen,
+    /// An MPIM read from a model file: **for tests only** (compensating an MPIM with itself
+    /// proves only that the chain is wired right, never that a compensator works on a stage).
+    Mpim,
 }
 
 /// The hysteresis section: the model to use and the parameters of each model.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct HysteresisConfig {
-    /// `"preisach"` (default) or `"bouc-wen"`.
+    /// `"preisach"` (default), `"bouc-wen"` or `"mpim"` (tests only).
     pub model: HysteresisModel,
     /// Parameters of the Preisach model (used when `model = "preisach"`).
     pub preisach: PreisachConfig,
     /// Parameters of the Bouc-Wen model (used when `model = "bouc-wen"`).
     pub bouc_wen: BoucWenConfig,
+    /// The MPIM (used when `model = "mpim"`; for tests only).
+    pub mpim: MpimConfig,
+}
+
+/// An MPIM read from a hystcomp model file (`direction = "plant"`, input: the DAC command
+/// voltage in V, output: displacement in um), as the stage's hysteresis. **For tests only.**
+/// The stage's amplifier voltage is divided by the amplifier gain to give the model its command
+/// voltage.
+#[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct MpimConfig {
+    /// The model file; a relative path is relative to the stage file's directory. Required when
+    /// `model = "mpim"`.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub model_file: Option<std::path::PathBuf>,
 }
 
 impl Default for HysteresisConfig {
@@ -142,6 +160,7 @@ impl Default for HysteresisConfig {
             model: HysteresisModel::Preisach,
             preisach: PreisachConfig::default(),
             bouc_wen: BoucWenConfig::default(),
+            mpim: MpimConfig::default(),
         }
     }
 }
@@ -357,7 +376,14 @@ impl StageConfig {
             path: path.to_path_buf(),
             message: e.to_string(),
         })?;
-        StageConfig::from_toml_str(&text)
+        let mut config = StageConfig::from_toml_str(&text)?;
+        // A model file named relative to the stage file is found beside it.
+        if let (Some(file), Some(dir)) = (&config.hysteresis.mpim.model_file, path.parent()) {
+            if file.is_relative() {
+                config.hysteresis.mpim.model_file = Some(dir.join(file));
+            }
+        }
+        Ok(config)
     }
 
     /// The effective configuration as a stage file (every field written), for reports.
@@ -397,6 +423,15 @@ impl StageConfig {
 
         self.hysteresis.preisach.validate()?;
         self.hysteresis.bouc_wen.validate()?;
+        if self.hysteresis.model == HysteresisModel::Mpim
+            && self.hysteresis.mpim.model_file.is_none()
+        {
+            return Err(StageError::invalid(
+                "hysteresis.mpim.model_file",
+                "a model file path when hysteresis.model = \"mpim\"",
+                "nothing",
+            ));
+        }
 
         let c = &self.creep;
         within(

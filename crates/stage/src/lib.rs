@@ -38,11 +38,11 @@ mod stage;
 
 pub use config::{
     AmplifierConfig, BoucWenConfig, ConverterConfig, CreepConfig, HysteresisConfig,
-    HysteresisModel, MechanicsConfig, PreisachConfig, SensorConfig, StageConfig,
+    HysteresisModel, MechanicsConfig, MpimConfig, PreisachConfig, SensorConfig, StageConfig,
 };
 pub use error::StageError;
 pub use hysteresis::{
-    BoucWenHysteresis, Hysteresis, PreisachHysteresis, RateIndependentHysteresis,
+    BoucWenHysteresis, Hysteresis, MpimHysteresis, PreisachHysteresis, RateIndependentHysteresis,
 };
 pub use stage::{
     ClampCounts, STROKE_RAMP_DURATION_S, Stage, StageResponse, StageSample, quasi_static_stroke_um,

@@ -114,7 +114,7 @@ impl Stage {
             period_s,
             dac,
             amplifier: Amplifier::new(&config.amplifier, period_s),
-            hysteresis: Hysteresis::from_config(&config.hysteresis)?,
+            hysteresis: Hysteresis::from_config(&config.hysteresis, config.amplifier.gain)?,
             creep: Creep::new(&config.creep, period_s),
             mechanics: Mechanics::new(&config.mechanics, period_s),
             adc: Quantiser::new(&config.adc),

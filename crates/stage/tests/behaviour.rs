@@ -292,7 +292,7 @@ fn both_models_give_closed_major_loops_with_minor_loops_inside() {
     for model in [HysteresisModel::Preisach, HysteresisModel::BoucWen] {
         let mut config = StageConfig::default();
         config.hysteresis.model = model;
-        let mut h = hystcomp_stage::Hysteresis::from_config(&config.hysteresis).unwrap();
+        let mut h = hystcomp_stage::Hysteresis::from_config(&config.hysteresis, config.amplifier.gain).unwrap();
         let (up, down) = major_branches(&mut h);
         // Closed: a second major cycle retraces the first.
         let (up2, down2) = major_branches(&mut h);
@@ -339,7 +339,7 @@ fn both_models_give_closed_major_loops_with_minor_loops_inside() {
             for v in down_leg() {
                 let x = g.displacement_um(v);
                 match model {
-                    HysteresisModel::Preisach => {
+                    HysteresisModel::Preisach | HysteresisModel::Mpim => {
                         inside(x, v, 1e-4);
                     }
                     HysteresisModel::BoucWen => stray = stray.max(inside(x, v, 0.15 * up[top])),
@@ -352,7 +352,7 @@ fn both_models_give_closed_major_loops_with_minor_loops_inside() {
             for v in up_leg() {
                 let x = g.displacement_um(v);
                 match model {
-                    HysteresisModel::Preisach => {
+                    HysteresisModel::Preisach | HysteresisModel::Mpim => {
                         inside(x, v, 1e-4);
                     }
                     HysteresisModel::BoucWen => stray = stray.max(inside(x, v, 0.15 * up[top])),
@@ -366,7 +366,7 @@ fn both_models_give_closed_major_loops_with_minor_loops_inside() {
                 for v in down_leg().chain(up_leg()) {
                     let x = g.displacement_um(v);
                     match model {
-                        HysteresisModel::Preisach => {
+                        HysteresisModel::Preisach | HysteresisModel::Mpim => {
                             inside(x, v, 1e-4);
                         }
                         HysteresisModel::BoucWen => stray = stray.max(inside(x, v, 0.15 * up[top])),

@@ -6,15 +6,18 @@
 //!   evaluated with the memory of dominant extrema and an Everett-function table;
 //! - [`BoucWenHysteresis`]: an asymmetric Bouc-Wen model, integrated in closed form.
 //!
-//! A further model (e.g. an MPIM read from a model file, for tests) plugs in as one more
-//! variant of [`Hysteresis`] implementing [`RateIndependentHysteresis`], one more
-//! [`HysteresisModel`] value and one more arm in
+//! A third, [`MpimHysteresis`], reads an MPIM from a model file: for tests of the chain only.
+//!
+//! A further model plugs in as one more variant of [`Hysteresis`] implementing
+//! [`RateIndependentHysteresis`], one more [`HysteresisModel`] value and one more arm in
 //! [`Hysteresis::from_config`].
 
 mod bouc_wen;
+mod mpim;
 mod preisach;
 
 pub use bouc_wen::BoucWenHysteresis;
+pub use mpim::MpimHysteresis;
 pub use preisach::PreisachHysteresis;
 
 use crate::config::{HysteresisConfig, HysteresisModel};
@@ -38,17 +41,33 @@ pub enum Hysteresis {
     Preisach(PreisachHysteresis),
     /// An asymmetric Bouc-Wen model.
     BoucWen(BoucWenHysteresis),
+    /// An MPIM from a model file (tests only).
+    Mpim(MpimHysteresis),
 }
 
 impl Hysteresis {
-    /// Builds the model the configuration selects.
-    pub fn from_config(config: &HysteresisConfig) -> Result<Hysteresis, StageError> {
+    /// Builds the model the configuration selects; `amplifier_gain` (V/V) is needed by the MPIM,
+    /// whose model file takes the command voltage.
+    pub fn from_config(
+        config: &HysteresisConfig,
+        amplifier_gain: f64,
+    ) -> Result<Hysteresis, StageError> {
         Ok(match config.model {
             HysteresisModel::Preisach => {
                 Hysteresis::Preisach(PreisachHysteresis::new(&config.preisach)?)
             }
             HysteresisModel::BoucWen => {
                 Hysteresis::BoucWen(BoucWenHysteresis::new(&config.bouc_wen)?)
+            }
+            HysteresisModel::Mpim => {
+                let path = config.mpim.model_file.as_deref().ok_or_else(|| {
+                    StageError::invalid(
+                        "hysteresis.mpim.model_file",
+                        "a model file path when hysteresis.model = \"mpim\"",
+                        "nothing",
+                    )
+                })?;
+                Hysteresis::Mpim(MpimHysteresis::new(path, amplifier_gain)?)
             }
         })
     }
@@ -59,6 +78,7 @@ impl RateIndependentHysteresis for Hysteresis {
         match self {
             Hysteresis::Preisach(h) => h.displacement_um(voltage_v),
             Hysteresis::BoucWen(h) => h.displacement_um(voltage_v),
+            Hysteresis::Mpim(h) => h.displacement_um(voltage_v),
         }
     }
 
@@ -66,6 +86,7 @@ impl RateIndependentHysteresis for Hysteresis {
         match self {
             Hysteresis::Preisach(h) => h.reset(),
             Hysteresis::BoucWen(h) => h.reset(),
+            Hysteresis::Mpim(h) => h.reset(),
         }
     }
 }
