@@ -42,7 +42,7 @@ pub enum Hysteresis {
     /// An asymmetric Bouc-Wen model.
     BoucWen(BoucWenHysteresis),
     /// An MPIM from a model file (tests only).
-    Mpim(MpimHysteresis),
+    Mpim(Box<MpimHysteresis>),
 }
 
 impl Hysteresis {
@@ -67,7 +67,7 @@ impl Hysteresis {
                         "nothing",
                     )
                 })?;
-                Hysteresis::Mpim(MpimHysteresis::new(path, amplifier_gain)?)
+                Hysteresis::Mpim(Box::new(MpimHysteresis::new(path, amplifier_gain)?))
             }
         })
     }
