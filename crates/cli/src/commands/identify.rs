@@ -116,8 +116,9 @@ pub struct FitArgs {
     /// pso: number of iterations.
     #[arg(long, default_value_t = 200, value_name = "N")]
     pub iterations: usize,
-    /// pso: inertia weight at the first and last iteration, START,END (linear in between).
-    #[arg(long, value_name = "START,END", value_delimiter = ',', num_args = 2)]
+    /// pso: inertia weight at the first and last iteration, START,END (linear in between;
+    /// default 0.7298 throughout, Clerc & Kennedy's constriction; Shi & Eberhart use 0.9,0.4).
+    #[arg(long, value_name = "START,END", value_delimiter = ',')]
     pub inertia: Option<Vec<f64>>,
     /// pso: cognitive acceleration c1.
     #[arg(long, default_value_t = hystcomp_identify::CONSTRICTION_ACCELERATION)]
@@ -305,8 +306,15 @@ impl FitArgs {
                     .with_penalty(self.penalty)?
                     .with_seed(self.seed)
                     .with_polish(self.polish);
-                if let Some(inertia) = &self.inertia {
-                    pso = pso.with_inertia(inertia[0], inertia[1])?;
+                match self.inertia.as_deref() {
+                    None => {}
+                    Some(&[start, end]) => pso = pso.with_inertia(start, end)?,
+                    Some(other) => {
+                        return Err(CliError::input(format!(
+                            "--inertia takes two weights START,END (e.g. 0.9,0.4), got {} value(s)",
+                            other.len()
+                        )));
+                    }
                 }
                 let b = self.bound;
                 pso = pso.with_bounds(PsoBounds {
