@@ -50,7 +50,11 @@ fn bench(c: &mut Criterion) {
         method: Method::ParticleSwarm(PsoOptions::default()),
         ..IdentifyOptions::default()
     };
-    for (name, options) in [("ls n=10", ls(10)), ("ls n=50", ls(50)), ("pso n=10", pso.clone())] {
+    for (name, options) in [
+        ("ls n=10", ls(10)),
+        ("ls n=50", ls(50)),
+        ("pso n=10", pso.clone()),
+    ] {
         let fit = identify(&voltage, &displacement, &options).expect("identifies");
         eprintln!(
             "{name}: fit RMS {:.4} % of range, max {:.4} %, {}",
