@@ -55,6 +55,22 @@ fn bench_type<T: Real>(c: &mut Criterion, type_name: &str) {
             })
         });
 
+        // The same, each input waiting for the previous output (as in a control loop, and as
+        // every compensator's solve waits for its previous sample): the step's latency.
+        let mut chained = model.clone();
+        let tiny = T::from_f64(1e-30);
+        group.bench_with_input(BenchmarkId::new("mpim_forward_chained", n), &n, |b, _| {
+            b.iter(|| {
+                chained.reset();
+                let mut y = T::zero();
+                for (x, o) in volts.iter().zip(out.iter_mut()) {
+                    y = chained.step(*x + tiny * y);
+                    *o = y;
+                }
+                black_box(&out);
+            })
+        });
+
         let mut compensators: Vec<(&str, Box<dyn Compensator<T>>)> = vec![
             (
                 "ihc_exact",

@@ -87,8 +87,7 @@ impl<T: Real> SegmentEquation<T> for Eq5Exact<T> {
         (v - beta) / alpha
     }
     #[inline(always)]
-    fn root(&self, lo: T, hi: T, f_lo: T, f_hi: T, alpha: T, beta: T) -> T {
-        let inv_alpha = T::one() / alpha;
+    fn root(&self, lo: T, hi: T, f_lo: T, f_hi: T, alpha: T, beta: T, inv_alpha: T) -> T {
         let v = increasing_cubic_root(
             self.a1,
             inv_alpha,
@@ -122,7 +121,7 @@ impl<T: Real> SegmentEquation<T> for Eq5Delayed<T> {
         (v - beta) / alpha
     }
     #[inline(always)]
-    fn root(&self, lo: T, hi: T, _f_lo: T, _f_hi: T, _alpha: T, _beta: T) -> T {
+    fn root(&self, lo: T, hi: T, _f_lo: T, _f_hi: T, _alpha: T, _beta: T, _inv: T) -> T {
         self.w.max(lo).min(hi)
     }
 }
@@ -146,8 +145,8 @@ impl<T: Real> SegmentEquation<T> for ReachControl<T> {
         (v - beta) / alpha
     }
     #[inline(always)]
-    fn root(&self, lo: T, hi: T, _f_lo: T, _f_hi: T, alpha: T, beta: T) -> T {
-        ((self.control - beta) / alpha).max(lo).min(hi)
+    fn root(&self, lo: T, hi: T, _f_lo: T, _f_hi: T, _alpha: T, beta: T, inv_alpha: T) -> T {
+        ((self.control - beta) * inv_alpha).max(lo).min(hi)
     }
 }
 
@@ -190,7 +189,7 @@ impl<T: Real, B: Buffer<T>> Compensator<T> for Ihc<T, B> {
                 self.inverse.solve(&equation, w_prev - w, self.guard.limits)
             }
         };
-        let v = self.inverse.feed(solution.input);
+        let v = self.inverse.feed_solved(&solution);
         self.guard.emit(v, solution.saturated)
     }
 

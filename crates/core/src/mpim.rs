@@ -2,7 +2,7 @@
 
 use crate::buffer::{copied, filled};
 use crate::invertibility::min_branch_slope;
-use crate::play::{one_sided, update_bank};
+use crate::play::{feed_bank, four_way_sum, one_sided};
 use crate::{BranchSlope, Buffer, CoreError, Real};
 
 /// The discrete MPIM of eq. (4):
@@ -148,12 +148,13 @@ impl<T: Real, B: Buffer<T>> Mpim<T, B> {
         if input.is_nan() {
             return input;
         }
-        let sum = update_bank(
+        let sum = feed_bank(
             self.thresholds.as_ref(),
             self.weights.as_ref(),
             self.memory.as_mut(),
             input,
-        );
+        )
+        .sum;
         self.input_function(input) + sum
     }
 
@@ -175,17 +176,9 @@ impl<T: Real, B: Buffer<T>> Mpim<T, B> {
     /// The output the model would give for input `x` from its current memory, without
     /// changing the memory: the current branch of the piecewise-cubic map (ERRATA item 4).
     pub fn branch_output(&self, input: T) -> T {
-        let mut sum = T::zero();
-        for ((&w, &r), &b) in self
-            .memory
-            .as_ref()
-            .iter()
-            .zip(self.thresholds.as_ref())
-            .zip(self.weights.as_ref())
-        {
-            sum = sum + b * one_sided(input, r, w);
-        }
-        self.input_function(input) + sum
+        let (r, b, w) = (self.thresholds(), self.weights(), self.memory());
+        let n = r.len().min(b.len()).min(w.len());
+        self.input_function(input) + four_way_sum(n, |i| b[i] * one_sided(input, r[i], w[i]))
     }
 
     /// `g(x) = a1 x^3 + a2 x`, the polynomial input function of eq. (3).

@@ -3,16 +3,16 @@
 use crate::{CoreError, Real};
 
 /// `f_r(v, w) = max(v - r, min(v, w))`, eq. (2), written as a clamp of the memory `w` into the
-/// band `[v - r, v]` (the same value for `r >= 0`, without the cost of two float min/max calls).
+/// band `[v - r, v]` (the same value for `r >= 0`), as two selects that compile to `maxsd` /
+/// `minsd` (and vectorise in a bank).
 #[inline(always)]
 pub(crate) fn one_sided<T: Real>(input: T, threshold: T, memory: T) -> T {
     let lower = input - threshold;
-    if memory > input {
+    let raised = if memory < lower { lower } else { memory };
+    if raised > input {
         input
-    } else if memory < lower {
-        lower
     } else {
-        memory
+        raised
     }
 }
 
@@ -136,19 +136,66 @@ fn check_threshold<T: Real>(threshold: T) -> Result<(), CoreError> {
     Ok(())
 }
 
-/// Feeds `input` to a bank of one-sided play operators (eqs. (1)-(2)) and returns
-/// `sum_i b_i F_{r_i}[x](t)`. The inner loop of the MPIM and of every compensator.
+/// What feeding one input to a bank of play operators gives.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct BankUpdate<T> {
+    /// `sum_i b_i F_{r_i}[x](t)`.
+    pub sum: T,
+    /// How many operators sit at the upper edge of their band (`w_i = x - r_i`): moving up.
+    pub rising: usize,
+    /// How many operators sit at the lower edge of their band (`w_i = x`): moving down.
+    pub falling: usize,
+}
+
+/// Feeds `input` to a bank of one-sided play operators (eqs. (1)-(2)): updates every memory,
+/// counts the operators at either edge of their band and returns `sum_i b_i F_{r_i}[x](t)`.
+/// The inner loop of the MPIM and of every compensator: the clamp loop vectorises, and the
+/// weighted sum uses four partial sums, so that its add chain (the latency every exact
+/// compensator waits for) is a quarter as long.
 #[inline(always)]
-pub(crate) fn update_bank<T: Real>(
+pub(crate) fn feed_bank<T: Real>(
     thresholds: &[T],
     weights: &[T],
     memory: &mut [T],
     input: T,
-) -> T {
-    let mut sum = T::zero();
-    for ((w, &r), &b) in memory.iter_mut().zip(thresholds).zip(weights) {
-        *w = one_sided(input, r, *w);
-        sum = sum + b * *w;
+) -> BankUpdate<T> {
+    let n = memory.len().min(thresholds.len()).min(weights.len());
+    let (memory, thresholds, weights) = (&mut memory[..n], &thresholds[..n], &weights[..n]);
+    let mut rising = 0usize;
+    let mut falling = 0usize;
+    for (w, &r) in memory.iter_mut().zip(thresholds) {
+        let lower = input - r;
+        let next = one_sided(input, r, *w);
+        rising += usize::from(next <= lower);
+        falling += usize::from(next >= input);
+        *w = next;
+    }
+    let sum = four_way_sum(n, |i| weights[i] * memory[i]);
+    BankUpdate {
+        sum,
+        rising,
+        falling,
+    }
+}
+
+/// `sum_{i < n} term(i)` in four partial sums (`i mod 4` of the first `4 floor(n / 4)` terms, then
+/// the rest in order): a quarter of the add chain of a plain sum. Every weighted sum over the
+/// operators goes through here, so that all of them round the same way.
+#[inline(always)]
+pub(crate) fn four_way_sum<T: Real>(n: usize, term: impl Fn(usize) -> T) -> T {
+    let mut partial = [T::zero(); 4];
+    let full = n / 4 * 4;
+    let mut i = 0;
+    while i < full {
+        partial[0] = partial[0] + term(i);
+        partial[1] = partial[1] + term(i + 1);
+        partial[2] = partial[2] + term(i + 2);
+        partial[3] = partial[3] + term(i + 3);
+        i += 4;
+    }
+    let mut sum = (partial[0] + partial[1]) + (partial[2] + partial[3]);
+    for j in full..n {
+        sum = sum + term(j);
     }
     sum
 }

@@ -16,7 +16,7 @@
 //! or two, a root solve and the memory update.
 
 use crate::buffer::{copied, filled};
-use crate::play::one_sided;
+use crate::play::{feed_bank, one_sided};
 use crate::{Buffer, CoreError, OutputLimits, Real};
 
 /// The equation a compensator solves on one linear segment of the bank, `PI(x) = alpha x + beta`.
@@ -27,8 +27,10 @@ pub(crate) trait SegmentEquation<T: Real> {
     fn control(&self, x: T, alpha: T, beta: T) -> T;
     /// The `x` where the control equals `v`.
     fn input_at_control(&self, v: T, alpha: T, beta: T) -> T;
-    /// The root of the residual in `[lo, hi]`, given its values at both ends (`f_lo <= 0 <= f_hi`).
-    fn root(&self, lo: T, hi: T, f_lo: T, f_hi: T, alpha: T, beta: T) -> T;
+    /// The root of the residual in `[lo, hi]`, given its values at both ends (`f_lo <= 0 <= f_hi`);
+    /// `inverse_alpha` is `1 / alpha`, from a table.
+    #[allow(clippy::too_many_arguments)]
+    fn root(&self, lo: T, hi: T, f_lo: T, f_hi: T, alpha: T, beta: T, inverse_alpha: T) -> T;
 }
 
 /// The input of the bank that solves the equation, and whether the limits cut it short.
@@ -36,6 +38,15 @@ pub(crate) trait SegmentEquation<T: Real> {
 pub(crate) struct Solution<T> {
     pub input: T,
     pub saturated: bool,
+    /// The segment the solution lies on: the bank's output there is `alpha x + beta`.
+    pub alpha: T,
+    pub beta: T,
+    /// How many operators (the first ones) move on that segment.
+    pub moving: usize,
+    /// Whether the walk went up (the moving operators sit at the upper edge of their band) or
+    /// down (at the lower edge). A solution at a limit may lie an ulp the other side of the
+    /// previous input; the direction of the walk is what counts.
+    pub rising: bool,
 }
 
 /// A bank of one-sided play operators with a linear term, `a x + sum_i b_i F_{r_i}[x]`, and
@@ -46,6 +57,10 @@ pub(crate) struct PlayBank<T: Real, B: Buffer<T>> {
     weights: B,
     /// `prefix[k] = b_1 + ... + b_{k+1}`.
     prefix: B,
+    /// `inverse_alpha[k] = 1 / (a + b_1 + ... + b_{k+1})`: the reciprocal slope of each segment.
+    inverse_alpha: B,
+    /// `1 / a`.
+    inverse_a: T,
     memory: B,
     a: T,
     /// The last input fed.
@@ -56,27 +71,46 @@ pub(crate) struct PlayBank<T: Real, B: Buffer<T>> {
     rising_active: usize,
     /// How many operators (the first ones) moved down with the last input: `w_i = x`.
     falling_active: usize,
+    /// How many operators have a zero threshold (always moving).
+    always_active: usize,
+    /// Samples fed since `memory_sum` was last recomputed from the memory.
+    since_sync: u32,
 }
+
+/// How often (in samples) [`PlayBank::feed_solved`] recomputes the memory sum from the memory
+/// instead of taking it from the solved segment, so that rounding never accumulates.
+const SYNC_INTERVAL: u32 = 64;
 
 impl<T: Real, B: Buffer<T>> PlayBank<T, B> {
     /// A bank at the reset state (zero memory, last input 0).
     pub fn new(a: T, thresholds: &[T], weights: &[T]) -> Result<Self, CoreError> {
         let mut prefix: B = filled(T::zero(), weights.len())?;
+        let mut inverse_alpha: B = filled(T::zero(), weights.len())?;
         let mut sum = T::zero();
-        for (p, &b) in prefix.as_mut().iter_mut().zip(weights) {
+        for ((p, q), &b) in prefix
+            .as_mut()
+            .iter_mut()
+            .zip(inverse_alpha.as_mut().iter_mut())
+            .zip(weights)
+        {
             sum = sum + b;
             *p = sum;
+            *q = T::one() / (a + sum);
         }
         let mut bank = PlayBank {
             thresholds: copied(thresholds)?,
             weights: copied(weights)?,
             prefix,
+            inverse_alpha,
+            inverse_a: T::one() / a,
             memory: filled(T::zero(), weights.len())?,
             a,
             input: T::zero(),
             memory_sum: T::zero(),
             rising_active: 0,
             falling_active: 0,
+            always_active: thresholds.iter().take_while(|r| **r <= T::zero()).count(),
+            since_sync: 0,
         };
         bank.reset();
         Ok(bank)
@@ -87,6 +121,7 @@ impl<T: Real, B: Buffer<T>> PlayBank<T, B> {
         self.memory.as_mut().fill(T::zero());
         self.input = T::zero();
         self.memory_sum = T::zero();
+        self.since_sync = 0;
         let zero = T::zero();
         // At x = 0 with zero memory every operator sits at its lower edge (w = x), and those
         // with r = 0 also at their upper edge.
@@ -135,32 +170,54 @@ impl<T: Real, B: Buffer<T>> PlayBank<T, B> {
     /// Returns the bank's output `a x + sum b_i F_{r_i}[x]`.
     #[inline]
     pub fn feed(&mut self, x: T) -> T {
-        // Two alternating partial sums: the compensators are latency-bound (each sample's solve
-        // waits for the previous sample's memory sum), and two chains halve its length.
-        let (mut sum, mut other) = (T::zero(), T::zero());
-        let mut rising = 0usize;
-        let mut falling = 0usize;
-        for ((w, &r), &b) in self
+        let update = feed_bank(
+            self.thresholds.as_ref(),
+            self.weights.as_ref(),
+            self.memory.as_mut(),
+            x,
+        );
+        self.input = x;
+        self.memory_sum = update.sum;
+        self.rising_active = update.rising;
+        self.falling_active = update.falling;
+        self.a * x + update.sum
+    }
+
+    /// Feeds the solution of [`PlayBank::solve`] itself (`x == solution.input`): the same memory
+    /// as [`PlayBank::feed`], but the new memory sum and the counts of moving operators come
+    /// from the solved segment, so that the next sample's solve need not wait for the weighted
+    /// sum over all operators (the compensators are latency-bound). Every [`SYNC_INTERVAL`]
+    /// samples the sum is recomputed from the memory.
+    #[inline]
+    pub fn feed_solved(&mut self, solution: &Solution<T>) -> T {
+        let x = solution.input;
+        self.since_sync += 1;
+        if self.since_sync >= SYNC_INTERVAL {
+            self.since_sync = 0;
+            return self.feed(x);
+        }
+        for (w, &r) in self
             .memory
             .as_mut()
             .iter_mut()
             .zip(self.thresholds.as_ref())
-            .zip(self.weights.as_ref())
         {
-            let lower = x - r;
-            let next = one_sided(x, r, *w);
-            rising += usize::from(next <= lower);
-            falling += usize::from(next >= x);
-            *w = next;
-            sum = sum + b * next;
-            core::mem::swap(&mut sum, &mut other);
+            *w = one_sided(x, r, *w);
         }
-        let sum = sum + other;
+        // Operators beyond the moving ones hold their memory, away from the edge of their band
+        // on the side the input went; only the zero-threshold ones sit on both edges. (When the
+        // input did not move, these counts can only be too small, which the walk tolerates.)
+        if solution.rising {
+            self.rising_active = solution.moving;
+            self.falling_active = self.always_active;
+        } else {
+            self.falling_active = solution.moving;
+            self.rising_active = self.always_active;
+        }
         self.input = x;
-        self.memory_sum = sum;
-        self.rising_active = rising;
-        self.falling_active = falling;
-        self.a * x + sum
+        // On the segment the bank's output is alpha x + beta = a x + memory sum.
+        self.memory_sum = (solution.alpha - self.a) * x + solution.beta;
+        solution.alpha * x + solution.beta
     }
 
     /// Walks the segments of the bank from the last input (where the residual is `f_prev`) in
@@ -191,9 +248,17 @@ impl<T: Real, B: Buffer<T>> PlayBank<T, B> {
         };
         let mut alpha = self.a + moving;
         let mut beta = self.memory_sum - moving * x_prev;
+        let inverse_alpha = |k: usize| {
+            if k == 0 {
+                self.inverse_a
+            } else {
+                self.inverse_alpha.as_ref()[k - 1]
+            }
+        };
         if rising {
             let (mut lo, mut f_lo) = (x_prev, f_prev);
             let v_max = limits.max();
+            let mut moving = active;
             for i in active..weights.len() {
                 let (w, r, b) = (memory[i], thresholds[i], weights[i]);
                 let u = (w + r).max(lo);
@@ -203,10 +268,15 @@ impl<T: Real, B: Buffer<T>> PlayBank<T, B> {
                 let f_u = equation.residual(u, alpha, beta);
                 if f_u >= T::zero() {
                     return Solution {
-                        input: equation.root(lo, u, f_lo, f_u, alpha, beta),
+                        input: equation.root(lo, u, f_lo, f_u, alpha, beta, inverse_alpha(moving)),
                         saturated: false,
+                        alpha,
+                        beta,
+                        moving,
+                        rising: true,
                     };
                 }
+                moving = i + 1;
                 alpha = alpha + b;
                 beta = beta - b * (r + w);
                 lo = u;
@@ -218,15 +288,24 @@ impl<T: Real, B: Buffer<T>> PlayBank<T, B> {
                 return Solution {
                     input: end,
                     saturated: true,
+                    alpha,
+                    beta,
+                    moving,
+                    rising: true,
                 };
             }
             Solution {
-                input: equation.root(lo, end, f_lo, f_end, alpha, beta),
+                input: equation.root(lo, end, f_lo, f_end, alpha, beta, inverse_alpha(moving)),
                 saturated: false,
+                alpha,
+                beta,
+                moving,
+                rising: true,
             }
         } else {
             let (mut hi, mut f_hi) = (x_prev, f_prev);
             let v_min = limits.min();
+            let mut moving = active;
             for i in active..weights.len() {
                 let (w, b) = (memory[i], weights[i]);
                 let l = w.min(hi);
@@ -236,10 +315,15 @@ impl<T: Real, B: Buffer<T>> PlayBank<T, B> {
                 let f_l = equation.residual(l, alpha, beta);
                 if f_l <= T::zero() {
                     return Solution {
-                        input: equation.root(l, hi, f_l, f_hi, alpha, beta),
+                        input: equation.root(l, hi, f_l, f_hi, alpha, beta, inverse_alpha(moving)),
                         saturated: false,
+                        alpha,
+                        beta,
+                        moving,
+                        rising: false,
                     };
                 }
+                moving = i + 1;
                 alpha = alpha + b;
                 beta = beta - b * w;
                 hi = l;
@@ -251,11 +335,19 @@ impl<T: Real, B: Buffer<T>> PlayBank<T, B> {
                 return Solution {
                     input: end,
                     saturated: true,
+                    alpha,
+                    beta,
+                    moving,
+                    rising: false,
                 };
             }
             Solution {
-                input: equation.root(end, hi, f_end, f_hi, alpha, beta),
+                input: equation.root(end, hi, f_end, f_hi, alpha, beta, inverse_alpha(moving)),
                 saturated: false,
+                alpha,
+                beta,
+                moving,
+                rising: false,
             }
         }
     }

@@ -20,7 +20,8 @@ pub struct Wihc<T: Real, B: Buffer<T>> {
     /// `a2 v + sum b_i F_{r_i}[v]`: the plant model without its cubic term.
     bank: PlayBank<T, B>,
     a1: T,
-    a2: T,
+    /// `1 / a2`.
+    inverse_a2: T,
     mode: SolveMode,
     guard: OutputGuard<T>,
 }
@@ -46,7 +47,7 @@ impl<T: Real, B: Buffer<T>> Wihc<T, B> {
         let mut wihc = Wihc {
             bank: PlayBank::new(a2, plant.thresholds(), plant.weights())?,
             a1,
-            a2,
+            inverse_a2: T::one() / a2,
             mode,
             guard: OutputGuard::new(limits),
         };
@@ -117,7 +118,7 @@ impl<T: Real> SegmentEquation<T> for Eq9<T> {
         v
     }
     #[inline(always)]
-    fn root(&self, lo: T, hi: T, f_lo: T, f_hi: T, alpha: T, beta: T) -> T {
+    fn root(&self, lo: T, hi: T, f_lo: T, f_hi: T, alpha: T, beta: T, _inv: T) -> T {
         increasing_cubic_root(self.a1, alpha, beta - self.desired, lo, hi, f_lo, f_hi)
     }
 }
@@ -140,7 +141,7 @@ impl<T: Real, B: Buffer<T>> Compensator<T> for Wihc<T, B> {
             return self.guard.previous;
         };
         let v_prev = self.bank.input();
-        let (v, saturated) = match self.mode {
+        match self.mode {
             SolveMode::Exact => {
                 let equation = Eq9 {
                     a1: self.a1,
@@ -148,17 +149,22 @@ impl<T: Real, B: Buffer<T>> Compensator<T> for Wihc<T, B> {
                 };
                 let f_prev = self.a1 * v_prev * v_prev * v_prev + self.bank.output() - desired;
                 let s = self.bank.solve(&equation, f_prev, self.guard.limits);
-                (s.input, s.saturated)
+                let v = self.guard.emit(s.input, s.saturated);
+                if v == s.input {
+                    self.bank.feed_solved(&s);
+                } else {
+                    self.bank.feed(v);
+                }
+                v
             }
             SolveMode::Delayed => {
                 // H[v](t - Ts) = a1 v^3(t - Ts) + sum b_i F_{r_i}[v](t - Ts).
                 let h_prev = self.a1 * v_prev * v_prev * v_prev + self.bank.memory_sum();
-                ((desired - h_prev) / self.a2, false)
+                let v = self.guard.emit((desired - h_prev) * self.inverse_a2, false);
+                self.bank.feed(v);
+                v
             }
-        };
-        let v = self.guard.emit(v, saturated);
-        self.bank.feed(v);
-        v
+        }
     }
 
     fn limits(&self) -> OutputLimits<T> {
