@@ -144,8 +144,20 @@ fn dbo_crossval_within_sane_bounds() {
             );
             assert!(e.rms_percent.is_finite() && e.max_percent < 50.0);
             if name == "ls" {
+                // The delayed WIHC may ring while several operators move (its loop gain is
+                // then (3 a1 v^2 + sum of the moving b_i) / a2): a looser bound on its peak.
+                let max_bound = if r.compensator == "wihc-delayed" {
+                    20.0
+                } else {
+                    10.0
+                };
                 assert!(e.rms_percent < 3.0, "{}: {}", r.compensator, e.rms_percent);
-                assert!(e.max_percent < 10.0, "{}: {}", r.compensator, e.max_percent);
+                assert!(
+                    e.max_percent < max_bound,
+                    "{}: {}",
+                    r.compensator,
+                    e.max_percent
+                );
             }
         }
         assert!((100..200).contains(&t.warmup), "{}", t.warmup);
