@@ -267,6 +267,29 @@ pub fn explanations(study: &Study) -> Vec<TextSection> {
     };
     let rms = |run: Option<&TrackingRun>| run.map_or(f64::NAN, |r| r.indices.e_rms_percent);
     let mut paragraphs = Vec::new();
+    let at = |curve: &[f64], iteration: usize| {
+        curve
+            .get(iteration.min(curve.len()).saturating_sub(1))
+            .copied()
+            .unwrap_or(f64::NAN)
+    };
+    let [plant_curve, inverse_curve] = &paper.convergence;
+    if !plant_curve.is_empty() {
+        paragraphs.push(format!(
+            "The particle swarm converges slowly on this problem: its best plant fit is {:.3} % \
+             of the output range after 200 iterations (the usual budget), {:.3} % after 1000 and \
+             {:.3} % after {}; for the inverse model {:.3} %, {:.3} % and {:.3} %. The study \
+             gives it {} iterations (the convergence figure shows the whole curve).",
+            at(plant_curve, 200),
+            at(plant_curve, 1000),
+            at(plant_curve, plant_curve.len()),
+            plant_curve.len(),
+            at(inverse_curve, 200),
+            at(inverse_curve, 1000),
+            at(inverse_curve, inverse_curve.len()),
+            plant_curve.len(),
+        ));
+    }
     paragraphs.push(format!(
         "Both pipelines use the same thresholds (eq. (11), n = {}) and the same identification \
          record. Least squares reaches the global optimum for those thresholds: plant fit RMS \
@@ -514,7 +537,7 @@ pub fn write_outputs(
             .map(|(_, e)| e.as_slice())
             .unwrap_or(&[])
     };
-    let total = 2 + 2 * 3 + 2 * 2;
+    let total = 3 + 2 * 3 + 2 * 2;
     observer.begin("figures", total);
     let mut done = 0;
     let mut note_store: Vec<String> = Vec::new();
@@ -542,6 +565,44 @@ pub fn write_outputs(
         done += 1;
         observer.advance(done);
     }
+    // Convergence of the particle swarm (no equivalent in the paper).
+    if let (Some(paper), Some(exact)) = (study.pipeline("paper"), study.pipeline("exact")) {
+        let [plant, inverse] = &paper.convergence;
+        if !plant.is_empty() && !inverse.is_empty() {
+            // From iteration 20 on: the first few start orders of magnitude higher.
+            let skip = 19.min(plant.len() - 1).min(inverse.len() - 1);
+            let (plant, inverse) = (&plant[skip..], &inverse[skip..]);
+            let iterations: Vec<f64> = (skip + 1..=skip + plant.len()).map(|i| i as f64).collect();
+            let ends = [(skip + 1) as f64, (skip + plant.len()) as f64];
+            let ls_plant = [exact.plant.report.fit.rms_percent; 2];
+            let ls_inverse = [exact.inverse.report.fit.rms_percent; 2];
+            let panel = Panel::time_series(
+                "Particle swarm: best fit error against iteration",
+                "RMS fit error (% of the output range)",
+            )
+            .with_axis_labels("iteration", "RMS fit error (% of the output range)")
+            .with_series("PSO, plant model", &iterations, plant)
+            .with_series(
+                "PSO, inverse model",
+                &iterations[..inverse.len().min(iterations.len())],
+                &inverse[..inverse.len().min(iterations.len())],
+            )
+            .with_series("least squares, plant model", &ends, &ls_plant)
+            .with_series("least squares, inverse model", &ends, &ls_inverse);
+            let files = figures::write_panel_figure(dir, "fig01_pso_convergence", &panel)?;
+            entries.push(FigureEntry {
+                png_file: "fig01_pso_convergence.png".into(),
+                svg_file: Some("fig01_pso_convergence.svg".into()),
+                paper_figure: "(none; section 4.2)".into(),
+                caption: "Identification: the particle swarm's best RMS fit error after each \
+                          iteration (from the 20th), against the least-squares optimum for the same thresholds."
+                    .into(),
+            });
+            figures.extend([files.png, files.svg]);
+        }
+    }
+    done += 1;
+    observer.advance(done);
     // Fig. 7.
     {
         note_store.push(format!(

@@ -58,7 +58,7 @@ fn default_study_meets_the_acceptance_bounds_and_writes_a_report_chromium_shows(
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("report");
     let files = write_outputs(&study, &out, &meta(), &mut Silent).unwrap();
-    assert_eq!(files.figures.len(), 2 * 12);
+    assert_eq!(files.figures.len(), 2 * 13);
     for f in &files.figures {
         assert!(
             std::fs::metadata(f).unwrap().len() > 1000,
@@ -154,7 +154,9 @@ fn bad_options_are_refused_with_the_reason() {
     let mut options = StudyOptions::default();
     options.stage.mechanics.damping_ratio = -0.1;
     assert!(err(options).contains("damping_ratio"));
-    let mut options = StudyOptions::default();
-    options.operators = 0;
-    assert!(err(options).contains("operators"));
+    assert!(err(StudyOptions {
+        operators: 0,
+        ..StudyOptions::default()
+    })
+    .contains("operators"));
 }

@@ -32,7 +32,9 @@ pub struct Args {
 /// One measured figure.
 #[derive(Debug, Clone, Serialize)]
 struct Figure {
-    /// `mpim-forward`, `ihc`, `ihc-delayed`, `wihc`, `wihc-delayed` or `dihc`.
+    /// `mpim-forward` (a whole signal: consecutive samples overlap in the processor),
+    /// `mpim-chained` (each input waits for the previous output, as in a control loop),
+    /// `ihc`, `ihc-delayed`, `wihc`, `wihc-delayed` or `dihc`.
     what: &'static str,
     /// Where the model came from: `table1` / `table2` spread over `operators`, or the file.
     model: String,
@@ -125,6 +127,19 @@ impl Bench {
             forward
                 .process(black_box(&volts), &mut out)
                 .expect("equal lengths");
+        });
+        // Each input waiting for the previous output, as in a control loop (and as each
+        // compensator's solve waits for its previous sample): the step's latency.
+        let mut chained = plant.clone();
+        let tiny = T::from_f64(1e-30);
+        self.record("mpim-chained", name, n, precision, || {
+            chained.reset();
+            let mut y = T::zero();
+            for (x, o) in volts.iter().zip(out.iter_mut()) {
+                y = chained.step(*x + tiny * y);
+                *o = y;
+            }
+            black_box(&out);
         });
         let limits = OutputLimits::new(T::zero(), T::one())?;
         let compensators: [(&'static str, Box<dyn Compensator<T>>); 4] = [

@@ -25,7 +25,7 @@ pub struct Args {
     #[arg(long, default_value_t = 1)]
     seed: u64,
     /// Particle swarm iterations of the `paper` pipeline.
-    #[arg(long, default_value_t = 200)]
+    #[arg(long, default_value_t = hystcomp_experiments::study::STUDY_PSO_ITERATIONS)]
     pso_iterations: usize,
     /// Particles of the `paper` pipeline's swarm.
     #[arg(long, default_value_t = 40)]
