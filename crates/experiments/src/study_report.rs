@@ -273,23 +273,6 @@ pub fn explanations(study: &Study) -> Vec<TextSection> {
             .copied()
             .unwrap_or(f64::NAN)
     };
-    let [plant_curve, inverse_curve] = &paper.convergence;
-    if !plant_curve.is_empty() {
-        paragraphs.push(format!(
-            "The particle swarm converges slowly on this problem: its best plant fit is {:.3} % \
-             of the output range after 200 iterations (the usual budget), {:.3} % after 1000 and \
-             {:.3} % after {}; for the inverse model {:.3} %, {:.3} % and {:.3} %. The study \
-             gives it {} iterations (the convergence figure shows the whole curve).",
-            at(plant_curve, 200),
-            at(plant_curve, 1000),
-            at(plant_curve, plant_curve.len()),
-            plant_curve.len(),
-            at(inverse_curve, 200),
-            at(inverse_curve, 1000),
-            at(inverse_curve, inverse_curve.len()),
-            plant_curve.len(),
-        ));
-    }
     paragraphs.push(format!(
         "Both pipelines use the same thresholds (eq. (11), n = {}) and the same identification \
          record. Least squares reaches the global optimum for those thresholds: plant fit RMS \
@@ -309,6 +292,23 @@ pub fn explanations(study: &Study) -> Vec<TextSection> {
         study.identification_times_s[0],
         study.identification_times_s[1],
     ));
+    let [plant_curve, inverse_curve] = &paper.convergence;
+    if !plant_curve.is_empty() {
+        paragraphs.push(format!(
+            "The particle swarm converges slowly on this problem: its best plant fit is {:.3} % \
+             of the output range after 200 iterations (the usual budget), {:.3} % after 1000 and \
+             {:.3} % after {}; for the inverse model {:.3} %, {:.3} % and {:.3} %. The study \
+             gives it {} iterations (the convergence figure shows the whole curve).",
+            at(plant_curve, 200),
+            at(plant_curve, 1000),
+            at(plant_curve, plant_curve.len()),
+            plant_curve.len(),
+            at(inverse_curve, 200),
+            at(inverse_curve, 1000),
+            at(inverse_curve, inverse_curve.len()),
+            plant_curve.len(),
+        ));
+    }
     for family in ["ihc", "wihc"] {
         let ls_exact = rms(exact.run(family));
         let pso_delayed = rms(paper.run(family));
