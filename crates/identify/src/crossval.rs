@@ -6,14 +6,14 @@
 //! exactly the applied voltage, so the replay error tells, before touching hardware, how each
 //! compensator would do on the device the records come from.
 
-use hystcomp_core::{Compensator, Dihc, Ihc, OutputLimits, SolveMode, Wihc};
+use hystcomp_io::compensator::{Method, ScaledCompensator};
 use hystcomp_io::data::{check_finite, check_not_constant, check_same_length};
 use hystcomp_io::model_file::{Direction, ModelFile};
 use serde::{Deserialize, Serialize};
 
 use crate::identification::{auto_warmup, min_max};
 use crate::report::{ErrorStats, FitReport};
-use crate::{IdentifyError, IdentifyOptions, Observer, Warmup, identify_observed};
+use crate::{identify_observed, IdentifyError, IdentifyOptions, Observer, Warmup};
 
 /// One record: the drive voltage and the measured displacement, one pair per sample.
 #[derive(Debug, Clone, Copy)]
@@ -225,73 +225,23 @@ pub fn validate_models(
         .filter(|x| *x < ilo || *x > ihi)
         .count();
 
-    // (b) Offline inverse replay.
-    let plant_model = plant.model()?;
-    let inverse_model = inverse.model()?;
-    let plant_limits = OutputLimits::new(
-        plant.normalise_input(voltage_limits[0]),
-        plant.normalise_input(voltage_limits[1]),
-    )?;
-    let dihc_limits = OutputLimits::new(
-        inverse.output.normalise(voltage_limits[0]),
-        inverse.output.normalise(voltage_limits[1]),
-    )?;
-    let desired_plant: Vec<f64> = test
-        .displacement
-        .iter()
-        .map(|&y| plant.output.normalise(y))
-        .collect();
-    let desired_inverse: Vec<f64> = test
-        .displacement
-        .iter()
-        .map(|&y| inverse.normalise_input(y))
-        .collect();
-
-    type Built = Result<Box<dyn Compensator<f64>>, hystcomp_core::CoreError>;
-    let candidates: [(&str, Built, &ModelFile, &[f64]); 5] = [
-        (
-            "ihc",
-            Ihc::<f64, Vec<f64>>::new(&plant_model, plant_limits, SolveMode::Exact)
-                .map(|c| Box::new(c) as Box<dyn Compensator<f64>>),
-            plant,
-            &desired_plant,
-        ),
-        (
-            "ihc-delayed",
-            Ihc::<f64, Vec<f64>>::new(&plant_model, plant_limits, SolveMode::Delayed)
-                .map(|c| Box::new(c) as Box<dyn Compensator<f64>>),
-            plant,
-            &desired_plant,
-        ),
-        (
-            "wihc",
-            Wihc::<f64, Vec<f64>>::new(&plant_model, plant_limits, SolveMode::Exact)
-                .map(|c| Box::new(c) as Box<dyn Compensator<f64>>),
-            plant,
-            &desired_plant,
-        ),
-        (
-            "wihc-delayed",
-            Wihc::<f64, Vec<f64>>::new(&plant_model, plant_limits, SolveMode::Delayed)
-                .map(|c| Box::new(c) as Box<dyn Compensator<f64>>),
-            plant,
-            &desired_plant,
-        ),
-        (
-            "dihc",
-            Dihc::<f64, Vec<f64>>::new(&inverse_model, ilo, ihi, dihc_limits)
-                .map(|c| Box::new(c) as Box<dyn Compensator<f64>>),
-            inverse,
-            &desired_inverse,
-        ),
-    ];
-    let mut replay = Vec::with_capacity(candidates.len());
-    for (name, built, file, desired) in candidates {
-        let mut compensator = match built {
+    // (b) Offline inverse replay: the measured displacement as y_d, in physical units, through
+    // each compensator built from its model file (the scaling is the io crate's, as everywhere).
+    let mut replay = Vec::with_capacity(Method::ALL.len());
+    for method in Method::ALL {
+        let file = match method.needs() {
+            Direction::Plant => plant,
+            Direction::Inverse => inverse,
+        };
+        let mut compensator = match ScaledCompensator::new(
+            file,
+            method,
+            Some((voltage_limits[0], voltage_limits[1])),
+        ) {
             Ok(c) => c,
             Err(e) => {
                 replay.push(Replay {
-                    compensator: name.to_owned(),
+                    compensator: method.name().to_owned(),
                     error: None,
                     saturated: 0,
                     failure: Some(e.to_string()),
@@ -299,21 +249,16 @@ pub fn validate_models(
                 continue;
             }
         };
-        // The voltage a compensator returns is its model's input (plant) or output (inverse).
-        let to_volts = |v: f64| match file.direction {
-            Direction::Plant => file.input.to_physical(v),
-            Direction::Inverse => file.output_to_physical(v),
-        };
         let mut voltage = Vec::with_capacity(samples);
         let mut saturated_before = 0;
-        for (k, &y_d) in desired.iter().enumerate() {
+        for (k, &y_d) in test.displacement.iter().enumerate() {
             if k == start {
                 saturated_before = compensator.diagnostics().saturated;
             }
-            voltage.push(to_volts(compensator.step(y_d)));
+            voltage.push(compensator.step(y_d));
         }
         replay.push(Replay {
-            compensator: name.to_owned(),
+            compensator: method.name().to_owned(),
             error: ErrorStats::new(
                 &voltage[span.clone()],
                 &test.voltage[span.clone()],
@@ -338,5 +283,9 @@ pub fn validate_models(
 /// `max - min`, or 1 for a constant span (so that percentages stay finite).
 fn range_of(values: &[f64]) -> f64 {
     let (lo, hi) = min_max(values);
-    if hi > lo { hi - lo } else { 1.0 }
+    if hi > lo {
+        hi - lo
+    } else {
+        1.0
+    }
 }
