@@ -152,11 +152,13 @@ impl<T: Real> OutputGuard<T> {
     }
 
     /// Clamps `value` into the limits (counting a saturation when `saturated` or when the
-    /// clamp changed it), records and returns it.
+    /// clamp moved it by more than rounding: an exact solution on a limit is not a
+    /// saturation), records and returns it.
     #[inline]
     pub fn emit(&mut self, value: T, saturated: bool) -> T {
         let out = self.limits.clamp_or(value, self.previous);
-        if saturated || out != value {
+        let rounding = T::epsilon() * T::from_f64(64.0) * value.abs().max(T::one());
+        if saturated || !((out - value).abs() <= rounding) {
             self.diagnostics.saturated += 1;
         }
         self.previous = out;
