@@ -49,6 +49,13 @@ pub struct Context {
     pub json: bool,
 }
 
+/// Prints `value` as the one JSON document of a `--json` run.
+pub fn print_json<T: serde::Serialize>(value: &T) -> Result<(), CliError> {
+    let text = serde_json::to_string_pretty(value).map_err(|e| CliError::output(e.to_string()))?;
+    println!("{text}");
+    Ok(())
+}
+
 fn main() -> ExitCode {
     let cli = Cli::parse();
     let ctx = Context { json: cli.json };

@@ -1,26 +1,11 @@
 //! `hystcomp compensate` and `hystcomp bench` through the built binary.
 
+mod common;
+
+use common::*;
+
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
-
-fn hystcomp(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_hystcomp"))
-        .args(args)
-        .output()
-        .expect("the hystcomp binary runs")
-}
-
-fn models() -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../models")
-}
-
-fn stderr(o: &Output) -> String {
-    String::from_utf8_lossy(&o.stderr).into_owned()
-}
-
-fn s(p: &Path) -> &str {
-    p.to_str().unwrap()
-}
+use std::process::Output;
 
 /// A trajectory (time s, desired um) produced by a voltage sweep through the Table 1 plant,
 /// so that it is reachable; returns the sweep too.

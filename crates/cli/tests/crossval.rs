@@ -1,29 +1,20 @@
 //! `hystcomp crossval` through the binary: synthetic records with a known answer, per-file
 //! column options, the real DBO records (skipped when absent), and bad input.
 
+mod common;
+
+use common::*;
+
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
 
 use hystcomp_core::Mpim;
 use hystcomp_io::model_file::{Direction, ModelFile};
 use serde_json::Value;
 
-const BIN: &str = env!("CARGO_BIN_EXE_hystcomp");
 const DBO: &str = concat!(
     env!("CARGO_MANIFEST_DIR"),
     "/../../../shared/data/dbo-micromanipulator/"
 );
-
-fn hystcomp(args: &[&str]) -> Output {
-    Command::new(BIN)
-        .args(args)
-        .output()
-        .expect("the binary runs")
-}
-
-fn stderr(output: &Output) -> String {
-    String::from_utf8_lossy(&output.stderr).into_owned()
-}
 
 /// Table 1 driven by `voltage` (0..10 V), in um with an offset of 5 um.
 fn displacement(voltage: &[f64]) -> Vec<f64> {

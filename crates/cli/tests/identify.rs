@@ -1,29 +1,16 @@
 //! `hystcomp identify` through the binary: files in every supported shape, JSON output,
 //! reproducible swarms, and every bad input with a non-zero exit and a message to act on.
 
+mod common;
+
+use common::*;
+
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+use std::process::Output;
 
 use hystcomp_core::Mpim;
 use hystcomp_io::model_file::{Direction, ModelFile};
 use serde_json::Value;
-
-const BIN: &str = env!("CARGO_BIN_EXE_hystcomp");
-
-fn hystcomp(args: &[&str]) -> Output {
-    Command::new(BIN)
-        .args(args)
-        .output()
-        .expect("the binary runs")
-}
-
-fn stderr(output: &Output) -> String {
-    String::from_utf8_lossy(&output.stderr).into_owned()
-}
-
-fn stdout(output: &Output) -> String {
-    String::from_utf8_lossy(&output.stdout).into_owned()
-}
 
 /// A synthetic record at 200 Hz from Table 1 of the paper: a decaying 1 Hz cycle between
 /// 0 and 10 V, starting at 0 V; displacement in um with a sensor offset of -40 um.
@@ -112,12 +99,10 @@ fn identifies_a_csv_with_a_header_by_column_names() {
     }
     let identification = model.identification.expect("the fit report is kept");
     assert_eq!(identification["solver"], "ls");
-    assert!(
-        identification["data"]
-            .as_str()
-            .unwrap()
-            .ends_with("record.csv")
-    );
+    assert!(identification["data"]
+        .as_str()
+        .unwrap()
+        .ends_with("record.csv"));
 }
 
 #[test]
@@ -329,7 +314,11 @@ fn bad_inputs_are_refused_with_a_message_to_act_on() {
         &csv_text(
             500,
             |k, line| {
-                if k == 40 { format!("{line},9") } else { line }
+                if k == 40 {
+                    format!("{line},9")
+                } else {
+                    line
+                }
             },
         ),
         &[],

@@ -1,22 +1,9 @@
 //! `hystcomp reproduce` and `hystcomp evaluate` through the built binary.
 
-use std::path::Path;
-use std::process::{Command, Output};
+mod common;
 
-fn hystcomp(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_hystcomp"))
-        .args(args)
-        .output()
-        .expect("the hystcomp binary runs")
-}
+use common::*;
 
-fn stderr(o: &Output) -> String {
-    String::from_utf8_lossy(&o.stderr).into_owned()
-}
-
-fn s(p: &Path) -> &str {
-    p.to_str().unwrap()
-}
 
 #[test]
 fn reproduce_prints_table3_writes_the_report_and_honours_json() {

@@ -1,18 +1,10 @@
 //! `hystcomp simulate` end to end: the built binary on files in a temporary folder.
 
+mod common;
+
+use common::*;
+
 use std::path::Path;
-use std::process::{Command, Output};
-
-fn hystcomp(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_hystcomp"))
-        .args(args)
-        .output()
-        .expect("the hystcomp binary runs")
-}
-
-fn stderr(output: &Output) -> String {
-    String::from_utf8_lossy(&output.stderr).into_owned()
-}
 
 /// A command record at `rate_hz`: a slow sine around 5 V, `n` samples, with a header.
 fn write_input(path: &Path, rate_hz: f64, n: usize) {
@@ -163,16 +155,6 @@ fn stage_file_and_named_columns_are_used() {
     assert_eq!(summary["sample_rate_hz"], 5000.0);
     assert_eq!(summary["clamped"]["dac"], 10);
     assert_eq!(summary["clamped"]["amplifier"], 5);
-}
-
-fn assert_fails(args: &[&str], fragments: &[&str]) {
-    let out = hystcomp(args);
-    assert!(!out.status.success(), "succeeded: {args:?}");
-    assert_ne!(out.status.code(), Some(0));
-    let message = stderr(&out);
-    for fragment in fragments {
-        assert!(message.contains(fragment), "{fragment:?} not in: {message}");
-    }
 }
 
 #[test]

@@ -158,7 +158,7 @@ impl<T: Real> OutputGuard<T> {
     pub fn emit(&mut self, value: T, saturated: bool) -> T {
         let out = self.limits.clamp_or(value, self.previous);
         let rounding = T::epsilon() * T::from_f64(64.0) * value.abs().max(T::one());
-        if saturated || !((out - value).abs() <= rounding) {
+        if saturated || value.is_nan() || (out - value).abs() > rounding {
             self.diagnostics.saturated += 1;
         }
         self.previous = out;

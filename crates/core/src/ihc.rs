@@ -79,14 +79,6 @@ impl<T: Real> SegmentEquation<T> for Eq5Exact<T> {
         w + self.a1 * v * v * v - self.desired
     }
     #[inline(always)]
-    fn control(&self, w: T, alpha: T, beta: T) -> T {
-        alpha * w + beta
-    }
-    #[inline(always)]
-    fn input_at_control(&self, v: T, alpha: T, beta: T) -> T {
-        (v - beta) / alpha
-    }
-    #[inline(always)]
     fn root(&self, lo: T, hi: T, f_lo: T, f_hi: T, alpha: T, beta: T, inv_alpha: T) -> T {
         let v = increasing_cubic_root(
             self.a1,
@@ -113,14 +105,6 @@ impl<T: Real> SegmentEquation<T> for Eq5Delayed<T> {
         w - self.w
     }
     #[inline(always)]
-    fn control(&self, w: T, alpha: T, beta: T) -> T {
-        alpha * w + beta
-    }
-    #[inline(always)]
-    fn input_at_control(&self, v: T, alpha: T, beta: T) -> T {
-        (v - beta) / alpha
-    }
-    #[inline(always)]
     fn root(&self, lo: T, hi: T, _f_lo: T, _f_hi: T, _alpha: T, _beta: T, _inv: T) -> T {
         self.w.max(lo).min(hi)
     }
@@ -135,14 +119,6 @@ impl<T: Real> SegmentEquation<T> for ReachControl<T> {
     #[inline(always)]
     fn residual(&self, w: T, alpha: T, beta: T) -> T {
         alpha * w + beta - self.control
-    }
-    #[inline(always)]
-    fn control(&self, w: T, alpha: T, beta: T) -> T {
-        alpha * w + beta
-    }
-    #[inline(always)]
-    fn input_at_control(&self, v: T, alpha: T, beta: T) -> T {
-        (v - beta) / alpha
     }
     #[inline(always)]
     fn root(&self, lo: T, hi: T, _f_lo: T, _f_hi: T, _alpha: T, beta: T, inv_alpha: T) -> T {

@@ -69,37 +69,30 @@ impl<T: Real> OneSidedPlay<T> {
 
 /// The classical (symmetric) play operator of threshold `r`:
 /// `F_r[x](t) = max(x(t) - r, min(x(t) + r, F_r[x](t_i)))`, output in `[x - r, x + r]`
-/// (Krasnosel'skii & Pokrovskii 1989; Brokate & Sprekels 1996).
+/// (Krasnosel'skii & Pokrovskii 1989; Brokate & Sprekels 1996). It is the one-sided operator
+/// of threshold `2r` fed with `x + r`, and is built that way.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct SymmetricPlay<T> {
-    threshold: T,
-    memory: T,
+    band: OneSidedPlay<T>,
 }
 
 impl<T: Real> SymmetricPlay<T> {
     /// An operator with threshold `r >= 0` and explicit initial memory `w`.
     pub fn new(threshold: T, initial_memory: T) -> Result<Self, CoreError> {
         check_threshold(threshold)?;
-        if !initial_memory.is_finite() {
-            return Err(CoreError::NonFinite {
-                what: "initial memory",
-                index: None,
-            });
-        }
         Ok(SymmetricPlay {
-            threshold,
-            memory: initial_memory,
+            band: OneSidedPlay::new(threshold + threshold, initial_memory)?,
         })
     }
 
     /// The threshold `r`.
     pub fn threshold(&self) -> T {
-        self.threshold
+        self.band.threshold() / T::from_f64(2.0)
     }
 
     /// The current memory (last output).
     pub fn memory(&self) -> T {
-        self.memory
+        self.band.memory()
     }
 
     /// Feeds the next input sample and returns the operator output.
@@ -107,16 +100,7 @@ impl<T: Real> SymmetricPlay<T> {
     /// A NaN input leaves the memory unchanged and returns it.
     #[inline]
     pub fn step(&mut self, input: T) -> T {
-        if !input.is_nan() {
-            // Shift by r: the symmetric band [x - r, x + r] is the one-sided band of width 2r
-            // whose top is x + r.
-            self.memory = one_sided(
-                input + self.threshold,
-                self.threshold + self.threshold,
-                self.memory,
-            );
-        }
-        self.memory
+        self.band.step(input + self.threshold())
     }
 }
 

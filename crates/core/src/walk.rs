@@ -23,10 +23,17 @@ use crate::{Buffer, CoreError, OutputLimits, Real};
 pub(crate) trait SegmentEquation<T: Real> {
     /// The residual at `x`, increasing in `x`; the solution makes it zero.
     fn residual(&self, x: T, alpha: T, beta: T) -> T;
-    /// The control `v` the compensator emits at `x` (increasing in `x`).
-    fn control(&self, x: T, alpha: T, beta: T) -> T;
-    /// The `x` where the control equals `v`.
-    fn input_at_control(&self, v: T, alpha: T, beta: T) -> T;
+    /// The control `v` the compensator emits at `x` (increasing in `x`): by default the bank's
+    /// output `alpha x + beta` (IHC, whose bank is `P1^{-1}`).
+    #[inline(always)]
+    fn control(&self, x: T, alpha: T, beta: T) -> T {
+        alpha * x + beta
+    }
+    /// The `x` where the control equals `v`: by default `(v - beta) / alpha`.
+    #[inline(always)]
+    fn input_at_control(&self, v: T, alpha: T, beta: T) -> T {
+        (v - beta) / alpha
+    }
     /// The root of the residual in `[lo, hi]`, given its values at both ends (`f_lo <= 0 <= f_hi`);
     /// `inverse_alpha` is `1 / alpha`, from a table.
     #[allow(clippy::too_many_arguments)]

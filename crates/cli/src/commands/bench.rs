@@ -233,10 +233,7 @@ pub fn run(args: &Args, ctx: Context) -> Result<(), CliError> {
         figures: bench.figures,
     };
     if ctx.json {
-        println!(
-            "{}",
-            serde_json::to_string_pretty(&report).map_err(|e| CliError::output(e.to_string()))?
-        );
+        crate::print_json(&report)?;
         return Ok(());
     }
     println!(

@@ -144,10 +144,7 @@ pub fn run(args: &Args, ctx: Context) -> Result<(), CliError> {
             }),
     };
     if ctx.json {
-        println!(
-            "{}",
-            serde_json::to_string_pretty(&report).map_err(|e| CliError::output(e.to_string()))?
-        );
+        crate::print_json(&report)?;
     } else {
         println!(
             "{}: {} samples through {} -> {} (drive {:.4} .. {:.4} {}, limits {} .. {} {})",

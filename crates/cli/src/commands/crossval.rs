@@ -3,12 +3,12 @@
 
 use std::path::PathBuf;
 
-use hystcomp_identify::{CrossvalOptions, Record, Warmup, crossval};
+use hystcomp_identify::{crossval, CrossvalOptions, Record, Warmup};
 use hystcomp_io::data::{Column, RowRange};
 use hystcomp_io::model_file::Direction;
 use serde::Serialize;
 
-use super::identify::{ColumnArgs, FitArgs, load, print_fit};
+use super::identify::{load, print_fit, ColumnArgs, FitArgs};
 use crate::progress::Bar;
 use crate::{CliError, Context};
 
@@ -158,10 +158,7 @@ pub fn run(args: &Args, ctx: Context) -> Result<(), CliError> {
             plant_model: &cv.plant,
             inverse_model: &cv.inverse,
         };
-        println!(
-            "{}",
-            serde_json::to_string_pretty(&output).map_err(|e| CliError::output(e.to_string()))?
-        );
+        crate::print_json(&output)?;
         return Ok(());
     }
     println!("identified on {}:", args.train.display());

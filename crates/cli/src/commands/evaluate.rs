@@ -92,10 +92,7 @@ pub fn run(args: &Args, ctx: Context) -> Result<(), CliError> {
         desired_range: range,
     };
     if ctx.json {
-        println!(
-            "{}",
-            serde_json::to_string_pretty(&report).map_err(|e| CliError::output(e.to_string()))?
-        );
+        crate::print_json(&report)?;
     } else {
         println!(
             "{} samples, y_d from {:.4} to {:.4}\ne_mhe = {:.3} % ({} bins)\ne_m   = {:.3} %\ne_rms = {:.3} %",

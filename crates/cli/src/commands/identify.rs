@@ -3,8 +3,8 @@
 use std::path::{Path, PathBuf};
 
 use hystcomp_identify::{
-    IdentifyOptions, Method, OutputOffset, PsoBounds, PsoOptions, Thresholds, Warmup,
-    identify_observed,
+    identify_observed, IdentifyOptions, Method, OutputOffset, PsoBounds, PsoOptions, Thresholds,
+    Warmup,
 };
 use hystcomp_io::data::{self, Column, Delimiter, Header, ReadOptions, RowRange};
 use hystcomp_io::model_file::Direction;
@@ -478,10 +478,7 @@ pub fn run(args: &Args, ctx: Context) -> Result<(), CliError> {
             report: &fit.report,
             model: &model,
         };
-        println!(
-            "{}",
-            serde_json::to_string_pretty(&output).map_err(|e| CliError::output(e.to_string()))?
-        );
+        crate::print_json(&output)?;
     } else {
         println!(
             "{} model identified from {} -> {}",

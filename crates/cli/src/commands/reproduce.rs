@@ -105,10 +105,7 @@ pub fn run(args: &Args, ctx: Context) -> Result<(), CliError> {
             out_dir: args.out.display().to_string(),
             report: files.report.display().to_string(),
         };
-        println!(
-            "{}",
-            serde_json::to_string_pretty(&output).map_err(|e| CliError::output(e.to_string()))?
-        );
+        crate::print_json(&output)?;
     } else {
         print!("{summary}");
         println!(

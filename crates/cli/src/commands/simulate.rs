@@ -163,10 +163,7 @@ pub fn run(args: &Args, ctx: Context) -> Result<(), CliError> {
 
     if ctx.json {
         let document = summary(args, &config, time, &response);
-        println!(
-            "{}",
-            serde_json::to_string_pretty(&document).map_err(|e| CliError::output(e.to_string()))?
-        );
+        crate::print_json(&document)?;
     } else {
         let clamped = response.clamps.dac_clamped + response.clamps.amplifier_clamped;
         println!(
