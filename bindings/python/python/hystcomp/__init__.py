@@ -1,0 +1,118 @@
+"""hystcomp: feedforward hysteresis compensation of piezoelectric nanopositioners.
+
+After G.-Y. Gu and L.-M. Zhu, "Comparative experiments regarding approaches to feedforward
+hysteresis compensation for piezoceramic actuators", Smart Mater. Struct. 23 (2014) 095029,
+doi:10.1088/0964-1726/23/9/095029. Equation numbers refer to that paper.
+
+Systems are objects with a one-sample ``step`` and a whole-signal ``process`` (numpy arrays in
+and out):
+
+- ``Mpim``: the modified Prandtl-Ishlinskii model, eq. (4), in normalised units;
+- ``ModelFile``: an identified model with its physical scales (JSON), ``Scale``;
+- ``Compensator`` and its shorthands ``Ihc``, ``Wihc``, ``Dihc``: desired position in, drive
+  voltage out, never outside the limits;
+- ``identify(voltage, displacement, ...)``: a model from measured data (least squares or
+  particle swarm);
+- ``Stage``: a simulated piezo stage, ``stage.run(volts)`` returning a ``StageResponse``;
+- ``e_m``, ``e_rms``, ``e_mhe``, ``tracking_indices``: the indices of section 4.3;
+- ``reproduce()``: the paper's comparative study (Table 3) on the simulated stage.
+
+Errors are ``HystcompError`` subclasses (also ``ValueError``) or ``OSError`` for files.
+"""
+
+from __future__ import annotations
+
+from typing import Optional, Tuple
+
+from ._errors import (
+    HystcompError,
+    IdentificationError,
+    InvalidValueError,
+    ModelFileError,
+    NotInvertibleError,
+    StageConfigError,
+    WrongDirectionError,
+)
+from ._hystcomp import (
+    DEFAULT_MHE_BINS,
+    Compensator,
+    Identification,
+    ModelFile,
+    Mpim,
+    Scale,
+    Stage,
+    StageResponse,
+    StudyResult,
+    TrackingIndices,
+    __version__,
+    e_m,
+    e_mhe,
+    e_rms,
+    identify,
+    paper_trajectory,
+    reproduce,
+    tracking_indices,
+)
+
+__all__ = [
+    "DEFAULT_MHE_BINS",
+    "Compensator",
+    "Dihc",
+    "HystcompError",
+    "Identification",
+    "IdentificationError",
+    "Ihc",
+    "InvalidValueError",
+    "ModelFile",
+    "ModelFileError",
+    "Mpim",
+    "NotInvertibleError",
+    "Scale",
+    "Stage",
+    "StageConfigError",
+    "StageResponse",
+    "StudyResult",
+    "TrackingIndices",
+    "Wihc",
+    "WrongDirectionError",
+    "__version__",
+    "e_m",
+    "e_mhe",
+    "e_rms",
+    "identify",
+    "paper_trajectory",
+    "reproduce",
+    "tracking_indices",
+]
+
+
+class Ihc(Compensator):
+    """Inverse hysteresis compensation (section 3.1, eqs. (5)-(8)) from a plant model:
+    ``Compensator(model, "ihc" or "ihc-delayed", limits)``.
+
+    With ``delayed=True`` the cubic term uses the previous output ``v(t - Ts)``, as real-time
+    implementations do; by default the implicit equation is solved exactly each sample.
+    """
+
+    def __new__(cls, model, limits: Optional[Tuple[float, float]] = None, *, delayed: bool = False):
+        return super().__new__(cls, model, "ihc-delayed" if delayed else "ihc", limits)
+
+
+class Wihc(Compensator):
+    """Compensation without inverse (section 3.2, eq. (9)) from a plant model:
+    ``Compensator(model, "wihc" or "wihc-delayed", limits)``.
+
+    With ``delayed=True`` the loop is broken with ``H[v](t - Ts)``; by default the implicit
+    equation is solved exactly each sample.
+    """
+
+    def __new__(cls, model, limits: Optional[Tuple[float, float]] = None, *, delayed: bool = False):
+        return super().__new__(cls, model, "wihc-delayed" if delayed else "wihc", limits)
+
+
+class Dihc(Compensator):
+    """Direct inverse hysteresis compensation (section 3.3, eq. (10)) from an inverse model:
+    ``Compensator(model, "dihc", limits)``."""
+
+    def __new__(cls, model, limits: Optional[Tuple[float, float]] = None):
+        return super().__new__(cls, model, "dihc", limits)

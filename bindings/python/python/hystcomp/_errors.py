@@ -1,0 +1,60 @@
+"""The exceptions hystcomp raises. Every one carries the library's message, which says what is
+wrong and what to change. Files that cannot be read or written raise the built-in ``OSError``
+subclasses (``FileNotFoundError``, ``PermissionError``, ...) instead."""
+
+__all__ = [
+    "HystcompError",
+    "InvalidValueError",
+    "NotInvertibleError",
+    "WrongDirectionError",
+    "ModelFileError",
+    "IdentificationError",
+    "StageConfigError",
+]
+
+
+class HystcompError(Exception):
+    """Base class of every hystcomp error (besides ``OSError`` for files)."""
+
+
+class InvalidValueError(HystcompError, ValueError):
+    """An argument is unusable: NaN or infinite values, arrays of different lengths, negative or
+    unsorted thresholds, limits that are not finite and increasing, an unknown name."""
+
+
+class NotInvertibleError(InvalidValueError):
+    """The model cannot be inverted (or used by the method) over the range asked for: a branch
+    slope is not positive, the PI part has no eq. (7) inverse, ``a2 <= 0`` for WIHC, or the
+    delayed WIHC would diverge."""
+
+
+class WrongDirectionError(InvalidValueError):
+    """The model maps the other direction from the one the method needs (IHC and WIHC need a
+    plant model, DIHC an inverse model)."""
+
+
+class ModelFileError(HystcompError, ValueError):
+    """A model file's text is not a valid hystcomp model file (not JSON, another format version,
+    a missing or mistyped field, invalid scales)."""
+
+
+class IdentificationError(HystcompError, ValueError):
+    """No model could be identified from the data (ill-conditioned regressors, infeasible
+    constraints, a solver failure)."""
+
+
+class StageConfigError(HystcompError, ValueError):
+    """A stage file (TOML) does not parse or holds a physically impossible value."""
+
+
+for _cls in (
+    HystcompError,
+    InvalidValueError,
+    NotInvertibleError,
+    WrongDirectionError,
+    ModelFileError,
+    IdentificationError,
+    StageConfigError,
+):
+    _cls.__module__ = "hystcomp"
+del _cls

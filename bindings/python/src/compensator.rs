@@ -1,0 +1,199 @@
+//! `Compensator`: `hystcomp_io::compensator::ScaledCompensator` (physical units, limits in
+//! volts), with a one-sample `step` and a whole-signal `process`.
+
+use std::path::PathBuf;
+use std::sync::{Mutex, MutexGuard};
+
+use hystcomp_io::compensator::{Method, ScaledCompensator};
+use hystcomp_io::model_file::{Direction, ModelFile as IoModelFile, Scale as IoScale};
+use numpy::PyArray1;
+use pyo3::prelude::*;
+use pyo3::types::PyDict;
+
+use crate::arrays::{ArrayIn, array_out, check_finite_scalar, finite_values};
+use crate::errors::{self, invalid};
+use crate::model::{ModelFile, Mpim, dict};
+
+/// A model given as a `ModelFile` or as the path of one.
+#[derive(FromPyObject)]
+pub enum ModelArg<'py> {
+    /// A model file already read.
+    File(PyRef<'py, ModelFile>),
+    /// The path of a model file.
+    Path(PathBuf),
+}
+
+impl ModelArg<'_> {
+    fn load(self) -> PyResult<IoModelFile> {
+        match self {
+            ModelArg::File(f) => Ok(f.inner.clone()),
+            ModelArg::Path(p) => IoModelFile::load(&p).map_err(errors::model_file),
+        }
+    }
+}
+
+fn parse_method(method: &str) -> PyResult<Method> {
+    method.parse().map_err(errors::compensator)
+}
+
+fn check_limits(limits: Option<(f64, f64)>) -> PyResult<()> {
+    if let Some((lo, hi)) = limits {
+        if !(lo.is_finite() && hi.is_finite() && lo < hi) {
+            return Err(invalid(format!(
+                "limits ({lo}, {hi}) are invalid: give finite (min, max) with min < max"
+            )));
+        }
+    }
+    Ok(())
+}
+
+/// A feedforward hysteresis compensator (figure 1 of the paper): desired position in, drive
+/// voltage out, in the physical units of its model file (e.g. um in, V out).
+///
+/// - ``model``: a ``ModelFile`` or the path of one;
+/// - ``method``: ``"ihc"``, ``"ihc-delayed"``, ``"wihc"``, ``"wihc-delayed"`` (plant models) or
+///   ``"dihc"`` (inverse models);
+/// - ``limits``: ``(min, max)`` drive limits in the model's voltage unit; by default the range
+///   the model was identified on.
+///
+/// Every output lies within ``limits`` and is never NaN. ``step`` and ``process`` refuse NaN or
+/// infinite desired positions with ``InvalidValueError`` (state unchanged). Raises
+/// ``WrongDirectionError``, ``NotInvertibleError`` (over the limits), ``InvalidValueError``,
+/// ``ModelFileError`` or ``FileNotFoundError`` when it cannot be built.
+#[pyclass(module = "hystcomp", name = "Compensator", subclass, frozen)]
+pub struct Compensator {
+    // `ScaledCompensator` is `Send` but not `Sync`; Python objects must be both.
+    inner: Mutex<ScaledCompensator>,
+}
+
+impl Compensator {
+    fn lock(&self) -> MutexGuard<'_, ScaledCompensator> {
+        // A poisoned lock only means a panic elsewhere; the compensator state is still valid.
+        self.inner.lock().unwrap_or_else(|p| p.into_inner())
+    }
+}
+
+#[pymethods]
+impl Compensator {
+    #[new]
+    #[pyo3(signature = (model, method = "ihc", limits = None))]
+    fn new(model: ModelArg<'_>, method: &str, limits: Option<(f64, f64)>) -> PyResult<Self> {
+        let method = parse_method(method)?;
+        check_limits(limits)?;
+        let file = model.load()?;
+        let inner = ScaledCompensator::new(&file, method, limits).map_err(errors::compensator)?;
+        Ok(Compensator {
+            inner: Mutex::new(inner),
+        })
+    }
+
+    /// A compensator from a model in normalised units (desired position and control both
+    /// normalised, eq. (11)): a plant model for IHC and WIHC, an inverse model (valid for
+    /// desired positions in ``[0, 1]``) for DIHC.
+    #[staticmethod]
+    #[pyo3(signature = (model, method = "ihc", limits = (0.0, 1.0)))]
+    fn from_mpim(model: &Mpim, method: &str, limits: (f64, f64)) -> PyResult<Self> {
+        let method = parse_method(method)?;
+        check_limits(Some(limits))?;
+        let scale = |quantity: &str| IoScale {
+            quantity: quantity.to_string(),
+            unit: "1".to_string(),
+            offset: 0.0,
+            scale: 1.0,
+        };
+        let (input, output) = match method.needs() {
+            Direction::Plant => ("normalised voltage", "normalised displacement"),
+            Direction::Inverse => ("normalised displacement", "normalised voltage"),
+        };
+        let file = IoModelFile::from_model(
+            method.needs(),
+            scale(input),
+            scale(output),
+            [0.0, 1.0],
+            &model.inner,
+        )
+        .map_err(errors::model_file)?;
+        let inner =
+            ScaledCompensator::new(&file, method, Some(limits)).map_err(errors::compensator)?;
+        Ok(Compensator {
+            inner: Mutex::new(inner),
+        })
+    }
+
+    /// One sample: the drive for the desired position ``y_d``.
+    fn step(&self, y_d: f64) -> PyResult<f64> {
+        check_finite_scalar(y_d, "y_d")?;
+        Ok(self.lock().step(y_d))
+    }
+
+    /// A whole desired trajectory (array-like) from the current state: the drive signal
+    /// (numpy array). Releases the GIL while it runs.
+    fn process<'py>(
+        &self,
+        py: Python<'py>,
+        y_d: ArrayIn<'py>,
+    ) -> PyResult<Bound<'py, PyArray1<f64>>> {
+        let desired = finite_values(&y_d, "y_d")?;
+        // The lock is taken and released without the GIL, so that a thread waiting for the
+        // GIL can never hold up one waiting for the lock.
+        let control = py.detach(|| {
+            let mut control = vec![0.0; desired.len()];
+            self.lock()
+                .process(&desired, &mut control)
+                .map(|()| control)
+        });
+        Ok(array_out(py, control.map_err(errors::compensator)?))
+    }
+
+    /// Back to the initial state: operators' memory zero (eq. (1)), diagnostics cleared.
+    fn reset(&self) {
+        self.lock().reset();
+    }
+
+    /// ``(min, max)`` drive limits, in ``control_unit``.
+    #[getter]
+    fn limits(&self) -> (f64, f64) {
+        self.lock().limits()
+    }
+
+    /// The method: ``"ihc"``, ``"ihc-delayed"``, ``"wihc"``, ``"wihc-delayed"`` or ``"dihc"``.
+    #[getter]
+    fn method(&self) -> &'static str {
+        self.lock().method().name()
+    }
+
+    /// Unit of the desired position (the input), e.g. ``"um"``.
+    #[getter]
+    fn desired_unit(&self) -> String {
+        self.lock().desired_unit().to_string()
+    }
+
+    /// Unit of the drive (the output), e.g. ``"V"``.
+    #[getter]
+    fn control_unit(&self) -> String {
+        self.lock().control_unit().to_string()
+    }
+
+    /// Counters since the last reset: ``{"saturated": ..., "non_finite": ...}``; saturated
+    /// samples could not be reached within the limits (the output was clamped).
+    #[getter]
+    fn diagnostics<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
+        let d = self.lock().diagnostics();
+        dict(
+            py,
+            [("saturated", d.saturated), ("non_finite", d.non_finite)],
+        )
+    }
+
+    fn __repr__(slf: &Bound<'_, Self>) -> PyResult<String> {
+        let class = slf.get_type().name()?;
+        let c = slf.get().lock();
+        Ok(format!(
+            "{class}(method={:?}, desired_unit={:?}, control_unit={:?}, limits={:?})",
+            c.method().name(),
+            c.desired_unit(),
+            c.control_unit(),
+            c.limits()
+        ))
+    }
+}

@@ -1,0 +1,54 @@
+"""The package itself: its exceptions and its type stubs, which must describe the extension."""
+
+import ast
+import inspect
+from pathlib import Path
+
+import hystcomp
+from hystcomp import _hystcomp
+
+STUB = Path(hystcomp.__file__).with_name("_hystcomp.pyi")
+
+
+def stub_names():
+    tree = ast.parse(STUB.read_text())
+    functions, classes, constants = set(), {}, set()
+    for node in tree.body:
+        if isinstance(node, ast.FunctionDef):
+            functions.add(node.name)
+        elif isinstance(node, ast.ClassDef):
+            classes[node.name] = {n.name for n in node.body if isinstance(n, ast.FunctionDef)}
+        elif isinstance(node, ast.AnnAssign):
+            constants.add(node.target.id)
+    return functions, classes, constants
+
+
+def test_stubs_describe_every_public_name_of_the_extension():
+    functions, classes, constants = stub_names()
+    public = {n for n in dir(_hystcomp) if not n.startswith("_")} | {"__version__"}
+    runtime_classes = {n for n in public if inspect.isclass(getattr(_hystcomp, n))}
+    runtime_functions = {n for n in public if callable(getattr(_hystcomp, n))} - runtime_classes
+    assert runtime_classes == set(classes)
+    assert runtime_functions == functions
+    assert public - runtime_classes - runtime_functions == constants
+    for name, members in classes.items():
+        cls = getattr(_hystcomp, name)
+        runtime = {m for m in vars(cls) if not m.startswith("_") or m in ("__len__", "__copy__")}
+        stubbed = {m for m in members if m != "__init__"}
+        assert runtime == stubbed, f"{name}: runtime {sorted(runtime ^ stubbed)} differ from the stub"
+
+
+def test_every_public_object_has_a_docstring():
+    for name in hystcomp.__all__:
+        obj = getattr(hystcomp, name)
+        if callable(obj):
+            assert (obj.__doc__ or "").strip(), f"{name} has no docstring"
+
+
+def test_exception_hierarchy():
+    for name in ("InvalidValueError", "NotInvertibleError", "WrongDirectionError", "ModelFileError", "IdentificationError", "StageConfigError"):
+        cls = getattr(hystcomp, name)
+        assert issubclass(cls, hystcomp.HystcompError) and issubclass(cls, ValueError), name
+        assert cls.__module__ == "hystcomp"
+    assert issubclass(hystcomp.NotInvertibleError, hystcomp.InvalidValueError)
+    assert hystcomp.__version__.count(".") == 2

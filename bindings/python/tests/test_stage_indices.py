@@ -1,0 +1,121 @@
+"""Stage and StageResponse (python-control style), and the tracking indices."""
+
+import numpy as np
+import pytest
+
+import hystcomp
+
+
+def test_stage_runs_a_command_signal_into_a_response():
+    stage = hystcomp.Stage(seed=3)
+    assert stage.sample_rate_hz == 10_000.0 and stage.period_s == pytest.approx(1e-4)
+    volts = 5.0 + 4.0 * np.sin(2 * np.pi * np.arange(5000) / 5000)
+    response = stage.run(volts)
+    assert len(response) == 5000
+    np.testing.assert_array_equal(response.inputs, volts)
+    np.testing.assert_array_equal(response.command_v, volts)
+    np.testing.assert_array_equal(response.outputs, response.measured_position_um)
+    np.testing.assert_allclose(np.diff(response.time), 1e-4)
+    assert response.time[0] == 0.0
+    assert 10.0 < response.true_position_um.max() < 75.0
+    assert response.amplifier_v.max() == pytest.approx(135.0, rel=0.02)
+    assert response.clamps == {"dac_clamped": 0, "amplifier_clamped": 0, "non_finite": 0}
+    assert stage.samples == 5000 and stage.time_s == pytest.approx(0.5)
+
+
+def test_stage_is_deterministic_per_seed_and_resets():
+    volts = np.linspace(0, 8, 3000)
+    a = hystcomp.Stage(seed=1).run(volts).outputs
+    b = hystcomp.Stage(seed=1)
+    first = b.run(volts).outputs
+    c = hystcomp.Stage(seed=2).run(volts).outputs
+    np.testing.assert_array_equal(a, first)
+    assert not np.array_equal(a, c)
+    b.reset()
+    np.testing.assert_array_equal(np.array([b.step(v) for v in volts]), first)
+
+
+def test_stage_files_and_their_errors(tmp_path):
+    default = hystcomp.Stage()
+    again = hystcomp.Stage(default.config_toml, seed=0)
+    np.testing.assert_array_equal(default.run([1.0, 2.0]).outputs, again.run([1.0, 2.0]).outputs)
+    slow = hystcomp.Stage("[mechanics]\nresonance_hz = 600.0\n")
+    assert "resonance_hz = 600.0" in slow.config_toml
+    path = tmp_path / "stage.toml"
+    path.write_text("sample_rate_hz = 5000.0\n")
+    assert hystcomp.Stage.from_file(path).sample_rate_hz == 5000.0
+    with pytest.raises(hystcomp.StageConfigError, match="mechanics.damping_ratio"):
+        hystcomp.Stage("[mechanics]\ndamping_ratio = -1.0\n")
+    with pytest.raises(hystcomp.StageConfigError):
+        hystcomp.Stage("this is not toml")
+    with pytest.raises(FileNotFoundError):
+        hystcomp.Stage.from_file(tmp_path / "none.toml")
+
+
+def test_stage_refuses_non_finite_commands_and_counts_clamps():
+    stage = hystcomp.Stage()
+    with pytest.raises(hystcomp.InvalidValueError, match="command_v = NaN"):
+        stage.step(float("nan"))
+    with pytest.raises(hystcomp.InvalidValueError, match=r"command_v\[1\]"):
+        stage.run([1.0, np.inf])
+    assert stage.samples == 0
+    response = stage.run([20.0, -20.0, 5.0])
+    assert response.clamps["dac_clamped"] == 2
+    assert stage.full_scale_command_v == 10.0
+
+
+def test_quasi_static_stroke_is_about_the_nominal_75_um():
+    assert 70.0 < hystcomp.Stage().quasi_static_stroke_um() < 80.0
+
+
+def test_indices_of_known_records():
+    desired = np.linspace(0.0, 10.0, 101)
+    offset = desired + 0.5
+    assert hystcomp.e_m(desired, offset) == pytest.approx(5.0)
+    assert hystcomp.e_rms(desired, offset) == pytest.approx(5.0)
+    assert hystcomp.e_mhe(desired, offset) < 1.01
+    # A loop: up along y_d, down 1 above it: a vertical width of 1 in 10, plus the slope of
+    # the map within one bin (0.1 with 100 bins, 1 with 10).
+    up_down = np.concatenate([desired, desired[::-1]])
+    loop = np.concatenate([desired, desired[::-1] + 1.0])
+    assert hystcomp.e_mhe(up_down, loop) == pytest.approx(11.0, abs=0.01)
+    assert hystcomp.e_mhe(up_down, loop, bins=10) == pytest.approx(20.0, abs=0.01)
+    i = hystcomp.tracking_indices(up_down, loop, bins=10)
+    assert (i.e_mhe, i.e_m, i.e_rms, i.mhe_bins) == (
+        hystcomp.e_mhe(up_down, loop, bins=10),
+        hystcomp.e_m(up_down, loop),
+        hystcomp.e_rms(up_down, loop),
+        10,
+    )
+    assert i.as_dict() == {"e_mhe": i.e_mhe, "e_m": i.e_m, "e_rms": i.e_rms}
+    assert hystcomp.tracking_indices(desired, offset).mhe_bins == hystcomp.DEFAULT_MHE_BINS
+
+
+@pytest.mark.parametrize(
+    "desired, measured, message",
+    [
+        ([1.0, 2.0], [1.0], "2 samples but the measured record has 1"),
+        ([1.0, 1.0], [1.0, 2.0], "constant"),
+        ([1.0], [1.0], "at least 2"),
+        ([1.0, np.nan], [1.0, 2.0], "NaN or infinite value at sample 1"),
+    ],
+)
+def test_indices_refuse_bad_records_with_the_reason(desired, measured, message):
+    with pytest.raises(hystcomp.InvalidValueError, match=message):
+        hystcomp.tracking_indices(desired, measured)
+    with pytest.raises(hystcomp.InvalidValueError):
+        hystcomp.e_m(desired, measured)
+
+
+def test_paper_trajectory_is_the_section_4_3_multisine():
+    t, y_d = hystcomp.paper_trajectory(duration_s=10.0, sample_rate_hz=1000.0)
+    assert len(t) == len(y_d) == 10_000
+    expected = (
+        37.35
+        + 10.5 * np.sin(np.pi * t + 2.6)
+        + 10.5 * np.sin(1.6 * np.pi * t + 3)
+        + 15.75 * np.sin(2 * np.pi * t + 1.5)
+    )
+    np.testing.assert_allclose(y_d, expected, atol=1e-9)
+    with pytest.raises(hystcomp.InvalidValueError):
+        hystcomp.paper_trajectory(duration_s=-1.0)
