@@ -951,3 +951,9 @@ pub unsafe extern "C" fn hystcomp_mpim_free(m: *mut HystcompMpim) {
         drop(unsafe { Box::from_raw(m) });
     }));
 }
+
+/// The README examples of the bindings (`docs/bindings-readme-snippets.md`), compiled and run as
+/// doctests so that they cannot go stale.
+#[cfg(doctest)]
+#[doc = include_str!("../../../docs/bindings-readme-snippets.md")]
+pub struct ReadmeSnippets;

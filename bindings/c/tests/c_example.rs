@@ -14,10 +14,10 @@ use std::sync::OnceLock;
 
 use support::{available, cargo, run, workspace_root};
 
-/// Builds the static library and the example once; the path of the executable.
-fn round_trip_program() -> &'static PathBuf {
-    static PROGRAM: OnceLock<PathBuf> = OnceLock::new();
-    PROGRAM.get_or_init(|| {
+/// Builds the static library once; its path.
+fn static_library() -> &'static PathBuf {
+    static LIBRARY: OnceLock<PathBuf> = OnceLock::new();
+    LIBRARY.get_or_init(|| {
         let root = workspace_root();
         let target_dir = root.join("target/c-build");
         run(
@@ -29,30 +29,71 @@ fn round_trip_program() -> &'static PathBuf {
         );
         let library = target_dir.join("debug/libhystcomp.a");
         assert!(library.is_file(), "{} was not built", library.display());
-        assert!(
-            available("gcc"),
-            "gcc is needed to compile examples/c (apt-get install gcc)"
-        );
-        let program = target_dir.join("round_trip");
-        run(
-            Command::new("gcc")
-                .current_dir(&root)
-                .args([
-                    "-std=c99",
-                    "-O2",
-                    "-Wall",
-                    "-Wextra",
-                    "-Werror",
-                    "-pedantic",
-                ])
-                .args(["-I", "bindings/c/include", "examples/c/round_trip.c"])
-                .arg(&library)
-                .args(["-lpthread", "-ldl", "-lm", "-o"])
-                .arg(&program),
-            "examples/c/round_trip.c must compile without warnings against the committed header",
-        );
-        program
+        library
     })
+}
+
+/// Compiles `examples/c/{name}.c` against the committed header and the static library, with
+/// every warning an error; the path of the executable.
+fn compile_example(name: &str) -> PathBuf {
+    let root = workspace_root();
+    let library = static_library();
+    assert!(
+        available("gcc"),
+        "gcc is needed to compile examples/c (apt-get install gcc)"
+    );
+    let program = root.join("target/c-build").join(name);
+    run(
+        Command::new("gcc")
+            .current_dir(&root)
+            .args([
+                "-std=c99",
+                "-O2",
+                "-Wall",
+                "-Wextra",
+                "-Werror",
+                "-pedantic",
+            ])
+            .args(["-I", "bindings/c/include"])
+            .arg(format!("examples/c/{name}.c"))
+            .arg(library)
+            .args(["-lpthread", "-ldl", "-lm", "-o"])
+            .arg(&program),
+        &format!("examples/c/{name}.c must compile without warnings against the committed header"),
+    );
+    program
+}
+
+fn round_trip_program() -> &'static PathBuf {
+    static PROGRAM: OnceLock<PathBuf> = OnceLock::new();
+    PROGRAM.get_or_init(|| compile_example("round_trip"))
+}
+
+#[test]
+fn readme_c_example_is_examples_c_minimal_and_runs() {
+    let root = workspace_root();
+    let snippets = std::fs::read_to_string(root.join("docs/bindings-readme-snippets.md"))
+        .expect("docs/bindings-readme-snippets.md exists");
+    let block = snippets
+        .split("```c\n")
+        .nth(1)
+        .and_then(|rest| rest.split("```").next())
+        .expect("the snippets have a ```c block");
+    let minimal = std::fs::read_to_string(root.join("examples/c/minimal.c")).unwrap();
+    assert_eq!(
+        block, minimal,
+        "the C block of docs/bindings-readme-snippets.md must be examples/c/minimal.c verbatim"
+    );
+    let output = run(
+        Command::new(compile_example("minimal")).current_dir(&root),
+        "the minimal C example must run",
+    );
+    let stdout = String::from_utf8_lossy(&output.stdout);
+    assert!(stdout.starts_with("40 um -> "), "{stdout}");
+    assert!(
+        stdout.trim_end().ends_with(" V -> 40.000000 um"),
+        "{stdout}"
+    );
 }
 
 #[test]
