@@ -31,7 +31,7 @@ fn reachable_trajectory(dir: &Path) -> (PathBuf, Vec<f64>) {
 }
 
 fn read(path: &Path) -> Vec<Vec<f64>> {
-    use hystcomp_io::data::{read_columns, Column, ReadOptions};
+    use hystcomp_io::data::{Column, ReadOptions, read_columns};
     read_columns(
         path,
         &[Column::Index(1), Column::Index(2), Column::Index(3)],

@@ -99,10 +99,12 @@ fn identifies_a_csv_with_a_header_by_column_names() {
     }
     let identification = model.identification.expect("the fit report is kept");
     assert_eq!(identification["solver"], "ls");
-    assert!(identification["data"]
-        .as_str()
-        .unwrap()
-        .ends_with("record.csv"));
+    assert!(
+        identification["data"]
+            .as_str()
+            .unwrap()
+            .ends_with("record.csv")
+    );
 }
 
 #[test]
@@ -314,11 +316,7 @@ fn bad_inputs_are_refused_with_a_message_to_act_on() {
         &csv_text(
             500,
             |k, line| {
-                if k == 40 {
-                    format!("{line},9")
-                } else {
-                    line
-                }
+                if k == 40 { format!("{line},9") } else { line }
             },
         ),
         &[],

@@ -4,7 +4,6 @@ mod common;
 
 use common::*;
 
-
 #[test]
 fn reproduce_prints_table3_writes_the_report_and_honours_json() {
     let dir = tempfile::tempdir().unwrap();
@@ -60,9 +59,11 @@ fn reproduce_runs_on_a_stage_file_and_refuses_a_bad_one() {
         "--json",
     ]);
     assert!(o.status.success(), "{}", stderr(&o));
-    assert!(std::fs::read_to_string(out.join("index.html"))
-        .unwrap()
-        .contains("resonance_hz = 600.0"));
+    assert!(
+        std::fs::read_to_string(out.join("index.html"))
+            .unwrap()
+            .contains("resonance_hz = 600.0")
+    );
 
     std::fs::write(&stage, "[mechanics]\ndamping_ratio = -1.0\n").unwrap();
     let o = hystcomp(&["reproduce", "--stage", s(&stage), "--out", s(&out)]);

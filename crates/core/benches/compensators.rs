@@ -3,8 +3,8 @@
 //! loops; criterion reports the time per trajectory and the throughput in samples per second
 //! (divide 1e9 by it for nanoseconds per sample).
 
-use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion, Throughput};
-use hystcomp_core::{paper, Compensator, Dihc, Ihc, Mpim, OutputLimits, Real, SolveMode, Wihc};
+use criterion::{BenchmarkId, Criterion, Throughput, criterion_group, criterion_main};
+use hystcomp_core::{Compensator, Dihc, Ihc, Mpim, OutputLimits, Real, SolveMode, Wihc, paper};
 use std::hint::black_box;
 
 const SAMPLES: usize = 10_000;

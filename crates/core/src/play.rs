@@ -9,11 +9,7 @@ use crate::{CoreError, Real};
 pub(crate) fn one_sided<T: Real>(input: T, threshold: T, memory: T) -> T {
     let lower = input - threshold;
     let raised = if memory < lower { lower } else { memory };
-    if raised > input {
-        input
-    } else {
-        raised
-    }
+    if raised > input { input } else { raised }
 }
 
 /// The one-sided play operator `F_r` of eqs. (1)-(2) (Gu, Zhu & Su 2014, ref. [9] of the paper):

@@ -257,12 +257,10 @@ fn non_invertible_models_are_refused_by_every_compensator() {
         Err(CoreError::NotInvertible { .. })
     ));
     // Narrowing the range to where the model is increasing makes it acceptable.
-    assert!(Wihc::<f64, Vec<f64>>::new(
-        &bad,
-        OutputLimits::new(0.0, 0.5).unwrap(),
-        SolveMode::Exact
-    )
-    .is_ok());
+    assert!(
+        Wihc::<f64, Vec<f64>>::new(&bad, OutputLimits::new(0.0, 0.5).unwrap(), SolveMode::Exact)
+            .is_ok()
+    );
 }
 
 #[test]

@@ -32,7 +32,7 @@ use plotters::coord::Shift;
 use plotters::element::DashedPathElement;
 use plotters::prelude::*;
 use plotters::style::text_anchor::{HPos, Pos, VPos};
-use plotters::style::{register_font, FontStyle};
+use plotters::style::{FontStyle, register_font};
 
 /// The family name the committed font is registered under (the name plotters uses by default,
 /// so that SVG viewers fall back to their own sans-serif font).

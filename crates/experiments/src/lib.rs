@@ -18,6 +18,6 @@ pub mod trajectory;
 
 pub use indices::{IndexError, TrackingIndices};
 pub use reference::Reference;
-pub use study::{run_study, Study, StudyError, StudyObserver, StudyOptions};
-pub use study_report::{summarize, write_outputs, RunMeta, StudySummary};
+pub use study::{Study, StudyError, StudyObserver, StudyOptions, run_study};
+pub use study_report::{RunMeta, StudySummary, summarize, write_outputs};
 pub use trajectory::MultisineTrajectory;

@@ -27,8 +27,8 @@ use std::path::{Path, PathBuf};
 
 use serde::{Deserialize, Serialize};
 
-use crate::reference::{Reference, ReferenceIndices, ReferenceMpim};
 use crate::TrackingIndices;
+use crate::reference::{Reference, ReferenceIndices, ReferenceMpim};
 
 /// Version of this crate, printed in the report.
 const SOFTWARE_VERSION: &str = env!("CARGO_PKG_VERSION");
@@ -1288,8 +1288,11 @@ mod tests {
         assert!(html.contains(
             "✗ <code>paper</code> pipeline, IHC: e_mhe = 3.21 % misses the bound e_mhe ≤ 3 %"
         ));
-        assert!(html
-            .contains("✓ uncompensated run: e_mhe = 12.34 % meets the bound 10 % ≤ e_mhe ≤ 16 %"));
+        assert!(
+            html.contains(
+                "✓ uncompensated run: e_mhe = 12.34 % meets the bound 10 % ≤ e_mhe ≤ 16 %"
+            )
+        );
     }
 
     #[test]

@@ -23,16 +23,16 @@ use std::fmt;
 use std::time::Instant;
 
 use hystcomp_identify::{
-    identify_observed, Identification, IdentifyError, IdentifyOptions, Method as Solver, Progress,
-    PsoOptions, Thresholds, Warmup,
+    Identification, IdentifyError, IdentifyOptions, Method as Solver, Progress, PsoOptions,
+    Thresholds, Warmup, identify_observed,
 };
 use hystcomp_io::compensator::{CompensatorError, Method, ScaledCompensator};
 use hystcomp_io::model_file::Direction;
-use hystcomp_stage::{quasi_static_stroke_um, Stage, StageConfig, StageError};
+use hystcomp_stage::{Stage, StageConfig, StageError, quasi_static_stroke_um};
 use serde::Serialize;
 
 use crate::excitation::IdentificationExcitation;
-use crate::indices::{IndexError, TrackingIndices, DEFAULT_MHE_BINS};
+use crate::indices::{DEFAULT_MHE_BINS, IndexError, TrackingIndices};
 use crate::{MultisineTrajectory, Reference};
 
 /// Particle swarm iterations of the study's `paper` pipeline.

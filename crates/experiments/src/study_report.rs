@@ -9,13 +9,13 @@ use hystcomp_io::atomic::write_atomic;
 use serde::Serialize;
 
 use crate::figures::{
-    self, FigureError, Panel, LABEL_ACTUAL_POSITION, LABEL_DESIRED_POSITION, LABEL_POSITION,
-    LABEL_TRACKING_ERROR,
+    self, FigureError, LABEL_ACTUAL_POSITION, LABEL_DESIRED_POSITION, LABEL_POSITION,
+    LABEL_TRACKING_ERROR, Panel,
 };
 use crate::reference::ReferenceIndices;
 use crate::report::{
-    write_report, AcceptanceBound, Fact, FigureEntry, IndexName, ModelParameters, PipelineResult,
-    ReportData, ReportError, Seed, TextSection,
+    AcceptanceBound, Fact, FigureEntry, IndexName, ModelParameters, PipelineResult, ReportData,
+    ReportError, Seed, TextSection, write_report,
 };
 use crate::study::{Study, StudyObserver, TrackingRun};
 use crate::{Reference, TrackingIndices};

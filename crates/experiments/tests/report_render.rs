@@ -8,10 +8,10 @@
 
 use std::path::{Path, PathBuf};
 
-use hystcomp_experiments::figures::{self, Panel, LABEL_POSITION, LABEL_TRACKING_ERROR};
+use hystcomp_experiments::figures::{self, LABEL_POSITION, LABEL_TRACKING_ERROR, Panel};
 use hystcomp_experiments::report::{
-    write_report, AcceptanceBound, Compensator, Fact, FigureEntry, IndexName, ModelParameters,
-    PipelineResult, ReportData, Seed, TextSection,
+    AcceptanceBound, Compensator, Fact, FigureEntry, IndexName, ModelParameters, PipelineResult,
+    ReportData, Seed, TextSection, write_report,
 };
 use hystcomp_experiments::{Reference, TrackingIndices};
 

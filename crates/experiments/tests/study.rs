@@ -5,7 +5,7 @@ mod common;
 
 use common::*;
 use hystcomp_experiments::study::Silent;
-use hystcomp_experiments::{run_study, summarize, write_outputs, RunMeta, StudyOptions};
+use hystcomp_experiments::{RunMeta, StudyOptions, run_study, summarize, write_outputs};
 use hystcomp_io::model_file::ModelFile;
 
 fn meta() -> RunMeta {
@@ -141,22 +141,28 @@ fn the_study_is_deterministic_per_seed() {
 #[test]
 fn bad_options_are_refused_with_the_reason() {
     let err = |options: StudyOptions| run_study(&options, &mut Silent).unwrap_err().to_string();
-    assert!(err(StudyOptions {
-        periods: 1,
-        ..StudyOptions::default()
-    })
-    .contains("at least 2 periods"));
-    assert!(err(StudyOptions {
-        decimation: 0,
-        ..StudyOptions::default()
-    })
-    .contains("decimation"));
+    assert!(
+        err(StudyOptions {
+            periods: 1,
+            ..StudyOptions::default()
+        })
+        .contains("at least 2 periods")
+    );
+    assert!(
+        err(StudyOptions {
+            decimation: 0,
+            ..StudyOptions::default()
+        })
+        .contains("decimation")
+    );
     let mut options = StudyOptions::default();
     options.stage.mechanics.damping_ratio = -0.1;
     assert!(err(options).contains("damping_ratio"));
-    assert!(err(StudyOptions {
-        operators: 0,
-        ..StudyOptions::default()
-    })
-    .contains("operators"));
+    assert!(
+        err(StudyOptions {
+            operators: 0,
+            ..StudyOptions::default()
+        })
+        .contains("operators")
+    );
 }

@@ -13,7 +13,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::identification::{auto_warmup, min_max};
 use crate::report::{ErrorStats, FitReport};
-use crate::{identify_observed, IdentifyError, IdentifyOptions, Observer, Warmup};
+use crate::{IdentifyError, IdentifyOptions, Observer, Warmup, identify_observed};
 
 /// One record: the drive voltage and the measured displacement, one pair per sample.
 #[derive(Debug, Clone, Copy)]
@@ -283,9 +283,5 @@ pub fn validate_models(
 /// `max - min`, or 1 for a constant span (so that percentages stay finite).
 fn range_of(values: &[f64]) -> f64 {
     let (lo, hi) = min_max(values);
-    if hi > lo {
-        hi - lo
-    } else {
-        1.0
-    }
+    if hi > lo { hi - lo } else { 1.0 }
 }

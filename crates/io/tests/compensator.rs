@@ -50,7 +50,10 @@ fn each_method_needs_its_direction_of_model() {
     let inverse = example("table2-inverse.json");
     let err = ScaledCompensator::new(&plant, Method::Dihc, None).unwrap_err();
     assert!(matches!(err, CompensatorError::WrongDirection { .. }));
-    assert!(err.to_string().contains("dihc needs an inverse model"), "{err}");
+    assert!(
+        err.to_string().contains("dihc needs an inverse model"),
+        "{err}"
+    );
     let err = ScaledCompensator::new(&inverse, Method::Ihc, None).unwrap_err();
     assert!(err.to_string().contains("ihc needs a plant model"), "{err}");
     assert!(ScaledCompensator::new(&inverse, Method::Dihc, None).is_ok());
@@ -61,11 +64,13 @@ fn methods_parse_by_name_and_bad_limits_are_refused() {
     for m in Method::ALL {
         assert_eq!(m.name().parse::<Method>().unwrap(), m);
     }
-    assert!("ihc_exact"
-        .parse::<Method>()
-        .unwrap_err()
-        .to_string()
-        .contains("choose one of"));
+    assert!(
+        "ihc_exact"
+            .parse::<Method>()
+            .unwrap_err()
+            .to_string()
+            .contains("choose one of")
+    );
     let plant = example("table1-plant.json");
     for limits in [(5.0, 1.0), (0.0, f64::NAN), (f64::NEG_INFINITY, 1.0)] {
         let err = ScaledCompensator::new(&plant, Method::Ihc, Some(limits)).unwrap_err();

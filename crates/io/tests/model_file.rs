@@ -85,10 +85,12 @@ fn refusal(edit: impl Fn(&mut serde_json::Value)) -> String {
 #[test]
 fn each_bad_file_is_refused_with_a_message_naming_the_problem() {
     assert!(refusal(|v| v["format_version"] = 2.into()).contains("format_version 2"));
-    assert!(refusal(|v| {
-        v.as_object_mut().unwrap().remove("format_version");
-    })
-    .contains("format_version"));
+    assert!(
+        refusal(|v| {
+            v.as_object_mut().unwrap().remove("format_version");
+        })
+        .contains("format_version")
+    );
     assert!(
         refusal(|v| v["direction"] = "sideways".into()).contains("expected `plant` or `inverse`")
     );
@@ -100,10 +102,12 @@ fn each_bad_file_is_refused_with_a_message_naming_the_problem() {
     assert!(refusal(|v| v["thresholds"][3] = (-0.2).into()).contains("negative"));
     assert!(refusal(|v| v["a2"] = "x".into()).contains("a2"));
     assert!(refusal(|v| v["colour"] = "blue".into()).contains("colour"));
-    assert!(refusal(|v| {
-        v.as_object_mut().unwrap().remove("a1");
-    })
-    .contains("a1"));
+    assert!(
+        refusal(|v| {
+            v.as_object_mut().unwrap().remove("a1");
+        })
+        .contains("a1")
+    );
 }
 
 #[test]

@@ -292,7 +292,9 @@ fn both_models_give_closed_major_loops_with_minor_loops_inside() {
     for model in [HysteresisModel::Preisach, HysteresisModel::BoucWen] {
         let mut config = StageConfig::default();
         config.hysteresis.model = model;
-        let mut h = hystcomp_stage::Hysteresis::from_config(&config.hysteresis, config.amplifier.gain).unwrap();
+        let mut h =
+            hystcomp_stage::Hysteresis::from_config(&config.hysteresis, config.amplifier.gain)
+                .unwrap();
         let (up, down) = major_branches(&mut h);
         // Closed: a second major cycle retraces the first.
         let (up2, down2) = major_branches(&mut h);

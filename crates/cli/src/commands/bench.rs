@@ -8,7 +8,7 @@ use std::hint::black_box;
 use std::path::PathBuf;
 use std::time::Instant;
 
-use hystcomp_core::{paper, Compensator, Dihc, Ihc, Mpim, OutputLimits, Real, SolveMode, Wihc};
+use hystcomp_core::{Compensator, Dihc, Ihc, Mpim, OutputLimits, Real, SolveMode, Wihc, paper};
 use hystcomp_io::model_file::{Direction, ModelFile};
 use serde::Serialize;
 

@@ -3,12 +3,12 @@
 
 use std::path::PathBuf;
 
-use hystcomp_identify::{crossval, CrossvalOptions, Record, Warmup};
+use hystcomp_identify::{CrossvalOptions, Record, Warmup, crossval};
 use hystcomp_io::data::{Column, RowRange};
 use hystcomp_io::model_file::Direction;
 use serde::Serialize;
 
-use super::identify::{load, print_fit, ColumnArgs, FitArgs};
+use super::identify::{ColumnArgs, FitArgs, load, print_fit};
 use crate::progress::Bar;
 use crate::{CliError, Context};
 

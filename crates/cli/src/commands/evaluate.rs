@@ -2,8 +2,8 @@
 
 use std::path::PathBuf;
 
-use hystcomp_experiments::indices::DEFAULT_MHE_BINS;
 use hystcomp_experiments::TrackingIndices;
+use hystcomp_experiments::indices::DEFAULT_MHE_BINS;
 use hystcomp_io::data::{self, Column, Delimiter, Header, ReadOptions, RowRange};
 use serde::Serialize;
 

@@ -3,8 +3,8 @@
 use std::path::{Path, PathBuf};
 
 use hystcomp_identify::{
-    identify_observed, IdentifyOptions, Method, OutputOffset, PsoBounds, PsoOptions, Thresholds,
-    Warmup,
+    IdentifyOptions, Method, OutputOffset, PsoBounds, PsoOptions, Thresholds, Warmup,
+    identify_observed,
 };
 use hystcomp_io::data::{self, Column, Delimiter, Header, ReadOptions, RowRange};
 use hystcomp_io::model_file::Direction;

@@ -4,7 +4,7 @@
 use std::path::PathBuf;
 
 use hystcomp_experiments::study::StudyObserver;
-use hystcomp_experiments::{run_study, summarize, write_outputs, RunMeta, StudyOptions};
+use hystcomp_experiments::{RunMeta, StudyOptions, run_study, summarize, write_outputs};
 use hystcomp_stage::StageConfig;
 use serde::Serialize;
 

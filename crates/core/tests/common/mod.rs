@@ -2,7 +2,7 @@
 //! and plain reference implementations (the oracles the fast paths are checked against).
 #![allow(dead_code)]
 
-use hystcomp_core::{paper, Mpim, OutputLimits};
+use hystcomp_core::{Mpim, OutputLimits, paper};
 use proptest::test_runner::{Config, RngSeed};
 use rand::{Rng, RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
