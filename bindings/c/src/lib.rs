@@ -957,3 +957,8 @@ pub unsafe extern "C" fn hystcomp_mpim_free(m: *mut HystcompMpim) {
 #[cfg(doctest)]
 #[doc = include_str!("../../../docs/bindings-readme-snippets.md")]
 pub struct ReadmeSnippets;
+
+/// The Rust example of `docs/microcontroller.md`, compiled and run as a doctest.
+#[cfg(doctest)]
+#[doc = include_str!("../../../docs/microcontroller.md")]
+pub struct MicrocontrollerDoc;

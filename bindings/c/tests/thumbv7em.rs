@@ -1,0 +1,205 @@
+//! The core's compensators on a microcontroller: `examples/thumbv7em`, a `no_std`, `no_main`
+//! program that builds IHC, WIHC and DIHC in `f32` with fixed arrays and no allocator, is built
+//! for a Cortex-M4F (`thumbv7em-none-eabihf`) and its image inspected: no allocator linked, the
+//! step functions present, the code small, and the RAM per compensator equal to the table in
+//! `docs/microcontroller.md` (on the target and on this host).
+//!
+//! Without the target (and no way to add it with rustup) the test says so and builds the core
+//! without default features on the host instead.
+
+mod support;
+
+use std::mem::size_of;
+use std::path::PathBuf;
+use std::process::Command;
+
+use hystcomp_core::{Dihc, Ihc, Mpim, Wihc};
+use object::{Object, ObjectSection, ObjectSymbol};
+use support::{cargo, run, workspace_root};
+
+const TARGET: &str = "thumbv7em-none-eabihf";
+const LABELS: [&str; 4] = ["IHC", "WIHC", "DIHC", "MPIM"];
+
+/// `[IHC, WIHC, DIHC, MPIM]` for 10 then 100 operators, as `examples/thumbv7em` lists them.
+fn host_ram_bytes() -> [usize; 8] {
+    [
+        size_of::<Ihc<f32, [f32; 10]>>(),
+        size_of::<Wihc<f32, [f32; 10]>>(),
+        size_of::<Dihc<f32, [f32; 10]>>(),
+        size_of::<Mpim<f32, [f32; 10]>>(),
+        size_of::<Ihc<f32, [f32; 100]>>(),
+        size_of::<Wihc<f32, [f32; 100]>>(),
+        size_of::<Dihc<f32, [f32; 100]>>(),
+        size_of::<Mpim<f32, [f32; 100]>>(),
+    ]
+}
+
+/// The RAM table of `docs/microcontroller.md`: `(label, n) -> (target bytes, host bytes)`, in
+/// the order of [`host_ram_bytes`].
+fn documented_ram_bytes() -> Vec<(usize, usize)> {
+    let doc = std::fs::read_to_string(workspace_root().join("docs/microcontroller.md"))
+        .expect("docs/microcontroller.md exists");
+    let mut rows = Vec::new();
+    for n in [10, 100] {
+        for label in LABELS {
+            let prefix = format!("| {label} | {n} |");
+            let line = doc
+                .lines()
+                .find(|l| l.starts_with(&prefix))
+                .unwrap_or_else(|| panic!("docs/microcontroller.md has no row {prefix}"));
+            let cells: Vec<usize> = line
+                .split('|')
+                .skip(3)
+                .filter_map(|c| c.trim().parse().ok())
+                .collect();
+            assert!(cells.len() >= 2, "row {line:?} needs target and host bytes");
+            rows.push((cells[0], cells[1]));
+        }
+    }
+    rows
+}
+
+#[test]
+fn ram_per_compensator_on_the_host_is_the_documented_one() {
+    let documented = documented_ram_bytes();
+    for (i, bytes) in host_ram_bytes().into_iter().enumerate() {
+        assert_eq!(
+            documented[i].1,
+            bytes,
+            "docs/microcontroller.md: {} with {} operators takes {bytes} bytes on this host",
+            LABELS[i % 4],
+            if i < 4 { 10 } else { 100 }
+        );
+    }
+}
+
+fn target_installed() -> bool {
+    Command::new("rustup")
+        .args(["target", "list", "--installed"])
+        .output()
+        .is_ok_and(|o| {
+            String::from_utf8_lossy(&o.stdout)
+                .lines()
+                .any(|l| l.trim() == TARGET)
+        })
+}
+
+/// Builds the firmware image; `None` when the target is not available.
+fn firmware() -> Option<PathBuf> {
+    if !target_installed() {
+        let added = Command::new("rustup")
+            .args(["target", "add", TARGET])
+            .status()
+            .is_ok_and(|s| s.success());
+        if !added || !target_installed() {
+            return None;
+        }
+    }
+    let root = workspace_root();
+    let target_dir = root.join("target/thumbv7em-build");
+    run(
+        cargo()
+            .current_dir(root.join("examples/thumbv7em"))
+            .env("CARGO_TARGET_DIR", &target_dir)
+            .args(["build", "--quiet", "--release", "--target", TARGET]),
+        "examples/thumbv7em must build for a Cortex-M4F without an allocator",
+    );
+    Some(target_dir.join(format!("{TARGET}/release/hystcomp-thumbv7em-example")))
+}
+
+#[test]
+fn compensators_build_for_a_cortex_m4f_without_an_allocator() {
+    let Some(image) = firmware() else {
+        eprintln!(
+            "note: the {TARGET} target is not installed and rustup could not add it; building \
+             hystcomp-core without default features (no std, no alloc) on the host instead"
+        );
+        let root = workspace_root();
+        run(
+            cargo()
+                .current_dir(&root)
+                .env("CARGO_TARGET_DIR", root.join("target/thumbv7em-build"))
+                .args([
+                    "build",
+                    "--quiet",
+                    "-p",
+                    "hystcomp-core",
+                    "--no-default-features",
+                ]),
+            "hystcomp-core must build without std and alloc",
+        );
+        return;
+    };
+    let data = std::fs::read(&image).expect("the image was built");
+    let elf = object::File::parse(&*data).expect("the image is an ELF file");
+    assert_eq!(elf.architecture(), object::Architecture::Arm);
+    assert!(!elf.is_64());
+
+    let names: Vec<String> = elf
+        .symbols()
+        .filter_map(|s| s.name().ok().map(str::to_owned))
+        .collect();
+    for allocator in [
+        "__rust_alloc",
+        "__rust_alloc_zeroed",
+        "__rg_alloc",
+        "malloc",
+    ] {
+        assert!(
+            !names.iter().any(|n| n == allocator),
+            "the image links an allocator ({allocator})"
+        );
+    }
+    for step in [
+        "hystcomp_ihc_step",
+        "hystcomp_wihc_step",
+        "hystcomp_dihc_step",
+        "_start",
+    ] {
+        let symbol = elf
+            .symbols()
+            .find(|s| s.name() == Ok(step))
+            .unwrap_or_else(|| panic!("{step} is missing from the image"));
+        assert!(symbol.size() > 0, "{step} has no code");
+        eprintln!("{step}: {} bytes", symbol.size());
+    }
+
+    let text = elf
+        .section_by_name(".text")
+        .expect("a .text section")
+        .size();
+    let rodata = elf.section_by_name(".rodata").map_or(0, |s| s.size());
+    let bss = elf.section_by_name(".bss").map_or(0, |s| s.size());
+    eprintln!("{TARGET} image: .text {text} B, .rodata {rodata} B, .bss {bss} B");
+    assert!(
+        text < 32 * 1024,
+        "the three compensators take {text} bytes of code; keep them under 32 KiB"
+    );
+
+    // The target's own `size_of` values, compiled into the image.
+    let table = elf
+        .symbols()
+        .find(|s| s.name() == Ok("HYSTCOMP_RAM_BYTES"))
+        .expect("the RAM table is in the image");
+    let section = elf
+        .section_by_index(table.section_index().expect("in a section"))
+        .expect("its section");
+    let bytes = section
+        .data_range(table.address(), 32)
+        .expect("readable")
+        .expect("32 bytes");
+    let target: Vec<usize> = bytes
+        .chunks_exact(4)
+        .map(|c| u32::from_le_bytes(c.try_into().unwrap()) as usize)
+        .collect();
+    let documented = documented_ram_bytes();
+    for (i, bytes) in target.iter().enumerate() {
+        assert_eq!(
+            documented[i].0,
+            *bytes,
+            "docs/microcontroller.md: {} with {} operators takes {bytes} bytes on {TARGET}",
+            LABELS[i % 4],
+            if i < 4 { 10 } else { 100 }
+        );
+    }
+}

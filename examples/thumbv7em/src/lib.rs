@@ -1,0 +1,89 @@
+//! The compensators of `hystcomp-core` as a microcontroller runs them: `f32` samples, storage in
+//! fixed arrays (`[f32; N]`), no allocator, no `std`.
+//!
+//! [`Compensators`] holds an IHC and a WIHC built from the paper's Table 1 and a DIHC from its
+//! Table 2; the `*_step` functions are the per-sample calls a control loop makes (kept as
+//! separate functions so that their code can be measured). [`RAM_BYTES`] is the RAM each
+//! compensator takes, for `n = 10` and `n = 100` operators.
+#![no_std]
+
+use core::mem::size_of;
+
+use hystcomp_core::{
+    Compensator, CoreError, Dihc, Ihc, Mpim, OutputLimits, SolveMode, Wihc, paper,
+};
+
+/// Ten play operators, as in the paper.
+pub const N: usize = 10;
+
+/// The RAM of one compensator (its whole state: model, inverse, memory, limits, counters),
+/// bytes: `[IHC, WIHC, DIHC, forward MPIM]` with 10 operators, then the same with 100.
+pub const RAM_BYTES: [usize; 8] = [
+    size_of::<Ihc<f32, [f32; 10]>>(),
+    size_of::<Wihc<f32, [f32; 10]>>(),
+    size_of::<Dihc<f32, [f32; 10]>>(),
+    size_of::<Mpim<f32, [f32; 10]>>(),
+    size_of::<Ihc<f32, [f32; 100]>>(),
+    size_of::<Wihc<f32, [f32; 100]>>(),
+    size_of::<Dihc<f32, [f32; 100]>>(),
+    size_of::<Mpim<f32, [f32; 100]>>(),
+];
+
+/// The three compensators of the paper, in `f32` with ten operators each.
+pub struct Compensators {
+    /// IHC, eqs. (5)-(8), exact per-sample solve, from Table 1.
+    pub ihc: Ihc<f32, [f32; N]>,
+    /// WIHC, eq. (9), exact per-sample solve, from Table 1.
+    pub wihc: Wihc<f32, [f32; N]>,
+    /// DIHC, eq. (10), from Table 2.
+    pub dihc: Dihc<f32, [f32; N]>,
+}
+
+impl Compensators {
+    /// Builds the three from the paper's tables, with outputs limited to `[0, 1]` (normalised).
+    pub fn from_paper() -> Result<Self, CoreError> {
+        let plant: Mpim<f32, [f32; N]> = paper::TABLE1.model()?;
+        let inverse: Mpim<f32, [f32; N]> = paper::TABLE2.model()?;
+        let limits = OutputLimits::new(0.0, 1.0)?;
+        Ok(Compensators {
+            ihc: Ihc::new(&plant, limits, SolveMode::Exact)?,
+            wihc: Wihc::new(&plant, limits, SolveMode::Exact)?,
+            dihc: Dihc::new(&inverse, 0.0, 1.0, limits)?,
+        })
+    }
+}
+
+/// One IHC sample.
+#[inline(never)]
+#[unsafe(no_mangle)]
+pub fn hystcomp_ihc_step(c: &mut Ihc<f32, [f32; N]>, desired: f32) -> f32 {
+    c.step(desired)
+}
+
+/// One WIHC sample.
+#[inline(never)]
+#[unsafe(no_mangle)]
+pub fn hystcomp_wihc_step(c: &mut Wihc<f32, [f32; N]>, desired: f32) -> f32 {
+    c.step(desired)
+}
+
+/// One DIHC sample.
+#[inline(never)]
+#[unsafe(no_mangle)]
+pub fn hystcomp_dihc_step(c: &mut Dihc<f32, [f32; N]>, desired: f32) -> f32 {
+    c.step(desired)
+}
+
+/// A desired trajectory without `sin` (no libm needed here): a triangle wave over
+/// `[0.1, 0.8]` with a period of `period` samples, plus a small second triangle.
+pub fn desired(k: u32, period: u32) -> f32 {
+    let triangle = |k: u32, p: u32| {
+        let phase = (k % p) as f32 / p as f32;
+        if phase < 0.5 {
+            2.0 * phase
+        } else {
+            2.0 - 2.0 * phase
+        }
+    };
+    0.1 + 0.6 * triangle(k, period) + 0.1 * triangle(k, period / 7 + 1)
+}
