@@ -225,14 +225,15 @@ impl StudyResult {
 ///
 /// - ``stage_toml``: a stage file's TOML text (the default stage without it);
 /// - ``seed``: the stage noise (identification; tracking runs use ``seed + 1``) and the swarm;
-/// - ``pso_iterations``, ``pso_particles``: the ``paper`` pipeline's swarm (fewer is faster);
+/// - ``pso_iterations``, ``pso_particles``: the ``paper`` pipeline's swarm (by default that of
+///   ``hystcomp reproduce``; fewer is faster);
 /// - ``out_dir``: also write the HTML report, the figures and the models there.
 ///
-/// Releases the GIL while it runs (about a minute with the defaults). Raises
+/// Releases the GIL while it runs. Raises
 /// ``StageConfigError``, ``IdentificationError``, ``InvalidValueError`` (e.g. fewer than 2
 /// periods) or ``OSError`` (the report could not be written).
 #[pyfunction]
-#[pyo3(signature = (*, stage_toml = None, seed = 1, periods = 2, operators = 10, pso_iterations = 200, pso_particles = 40, out_dir = None))]
+#[pyo3(signature = (*, stage_toml = None, seed = 1, periods = 2, operators = 10, pso_iterations = None, pso_particles = None, out_dir = None))]
 #[allow(clippy::too_many_arguments)]
 pub fn reproduce(
     py: Python<'_>,
@@ -240,8 +241,8 @@ pub fn reproduce(
     seed: u64,
     periods: usize,
     operators: usize,
-    pso_iterations: usize,
-    pso_particles: usize,
+    pso_iterations: Option<usize>,
+    pso_particles: Option<usize>,
     out_dir: Option<PathBuf>,
 ) -> PyResult<StudyResult> {
     let stage = match stage_toml {
@@ -256,12 +257,21 @@ pub fn reproduce(
         operators,
         ..StudyOptions::default()
     };
-    options.pso = options
-        .pso
-        .clone()
-        .with_iterations(pso_iterations)
-        .and_then(|o| o.with_particles(pso_particles))
-        .map_err(errors::identify)?;
+    // Without them, the study's own swarm (that of `hystcomp reproduce`).
+    if let Some(iterations) = pso_iterations {
+        options.pso = options
+            .pso
+            .clone()
+            .with_iterations(iterations)
+            .map_err(errors::identify)?;
+    }
+    if let Some(particles) = pso_particles {
+        options.pso = options
+            .pso
+            .clone()
+            .with_particles(particles)
+            .map_err(errors::identify)?;
+    }
     // The study reads no clock; the report's time stamp comes from Python's.
     let generated_at: String = py
         .import("datetime")?

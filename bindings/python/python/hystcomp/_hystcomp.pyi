@@ -279,8 +279,8 @@ def reproduce(
     seed: int = 1,
     periods: int = 2,
     operators: int = 10,
-    pso_iterations: int = 200,
-    pso_particles: int = 40,
+    pso_iterations: Optional[int] = None,
+    pso_particles: Optional[int] = None,
     out_dir: Optional[PathLike] = None,
 ) -> StudyResult:
     """The comparative study of section 4 on the simulated stage."""
