@@ -4,16 +4,16 @@
 //! Thin, safe wrappers over the library (python-control style: systems are objects, numpy
 //! arrays in and out, a one-sample `step` and a whole-signal `process`):
 //!
-//! - [`model`]: `Mpim` (the core's model, normalised), `Scale`, `ModelFile` (hystcomp-io);
-//! - [`compensator`]: `Compensator` (hystcomp-io's `ScaledCompensator`: IHC, WIHC, DIHC in
+//! - `model`: `Mpim` (the core's model, normalised), `Scale`, `ModelFile` (hystcomp-io);
+//! - `compensator`: `Compensator` (hystcomp-io's `ScaledCompensator`: IHC, WIHC, DIHC in
 //!   physical units);
-//! - [`identify`]: `identify(...)` (hystcomp-identify);
-//! - [`stage`]: `Stage`, `StageResponse` (hystcomp-stage);
-//! - [`indices`]: `e_m`, `e_rms`, `e_mhe`, `tracking_indices` (hystcomp-experiments);
-//! - [`study`]: `reproduce(...)` (hystcomp-experiments' study).
+//! - `identify`: `identify(...)` (hystcomp-identify);
+//! - `stage`: `Stage`, `StageResponse` (hystcomp-stage);
+//! - `indices`: `e_m`, `e_rms`, `e_mhe`, `tracking_indices` (hystcomp-experiments);
+//! - `study`: `reproduce(...)` (hystcomp-experiments' study).
 //!
 //! Every argument is validated before it reaches the library, and every library error becomes
-//! a Python exception with the library's message ([`errors`]); no panic is relied upon.
+//! a Python exception with the library's message (module `errors`); no panic is relied upon.
 
 mod arrays;
 mod compensator;
