@@ -47,3 +47,14 @@ pub fn check_finite_scalar(value: f64, name: &str) -> PyResult<()> {
 pub fn array_out(py: Python<'_>, values: Vec<f64>) -> Bound<'_, PyArray1<f64>> {
     PyArray1::from_vec(py, values)
 }
+
+/// Two numbers `(lo, hi)` from any sequence of length 2 (a tuple, a list, a numpy array).
+pub fn pair(values: Vec<f64>, name: &str) -> PyResult<(f64, f64)> {
+    match values[..] {
+        [lo, hi] => Ok((lo, hi)),
+        _ => Err(invalid(format!(
+            "{name} must be two numbers (min, max), not {} value(s)",
+            values.len()
+        ))),
+    }
+}

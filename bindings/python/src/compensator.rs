@@ -10,7 +10,7 @@ use numpy::PyArray1;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
-use crate::arrays::{ArrayIn, array_out, check_finite_scalar, finite_values};
+use crate::arrays::{ArrayIn, array_out, check_finite_scalar, finite_values, pair};
 use crate::errors::{self, invalid};
 use crate::model::{ModelFile, Mpim, dict};
 
@@ -77,8 +77,9 @@ impl Compensator {
 impl Compensator {
     #[new]
     #[pyo3(signature = (model, method = "ihc", limits = None))]
-    fn new(model: ModelArg<'_>, method: &str, limits: Option<(f64, f64)>) -> PyResult<Self> {
+    fn new(model: ModelArg<'_>, method: &str, limits: Option<Vec<f64>>) -> PyResult<Self> {
         let method = parse_method(method)?;
+        let limits = limits.map(|l| pair(l, "limits")).transpose()?;
         check_limits(limits)?;
         let file = model.load()?;
         let inner = ScaledCompensator::new(&file, method, limits).map_err(errors::compensator)?;
@@ -91,9 +92,10 @@ impl Compensator {
     /// normalised, eq. (11)): a plant model for IHC and WIHC, an inverse model (valid for
     /// desired positions in ``[0, 1]``) for DIHC.
     #[staticmethod]
-    #[pyo3(signature = (model, method = "ihc", limits = (0.0, 1.0)))]
-    fn from_mpim(model: &Mpim, method: &str, limits: (f64, f64)) -> PyResult<Self> {
+    #[pyo3(signature = (model, method = "ihc", limits = vec![0.0, 1.0]))]
+    fn from_mpim(model: &Mpim, method: &str, limits: Vec<f64>) -> PyResult<Self> {
         let method = parse_method(method)?;
+        let limits = pair(limits, "limits")?;
         check_limits(Some(limits))?;
         let scale = |quantity: &str| IoScale {
             quantity: quantity.to_string(),

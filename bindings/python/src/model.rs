@@ -278,7 +278,7 @@ impl ModelFile {
 #[pymethods]
 impl ModelFile {
     #[new]
-    #[pyo3(signature = (direction, thresholds, weights, a1, a2, *, input = None, output = None, input_range = (0.0, 1.0), description = None))]
+    #[pyo3(signature = (direction, thresholds, weights, a1, a2, *, input = None, output = None, input_range = vec![0.0, 1.0], description = None))]
     #[allow(clippy::too_many_arguments)]
     fn new(
         direction: &str,
@@ -288,10 +288,11 @@ impl ModelFile {
         a2: f64,
         input: Option<Scale>,
         output: Option<Scale>,
-        input_range: (f64, f64),
+        input_range: Vec<f64>,
         description: Option<String>,
     ) -> PyResult<Self> {
         let direction = parse_direction(direction)?;
+        let input_range = crate::arrays::pair(input_range, "input_range")?;
         let mut inner = IoModelFile::new(
             direction,
             input.map_or_else(|| normalised_scale("normalised input"), |s| s.inner),

@@ -110,6 +110,11 @@ def test_bad_construction_raises_the_right_exception_with_the_reason(table1, tab
         hystcomp.Compensator(table1, "ihc", limits=(5.0, float("nan")))
     with pytest.raises(hystcomp.InvalidValueError, match="limits"):
         hystcomp.Compensator(table1, "ihc", limits=(5.0, 1.0))
+    with pytest.raises(hystcomp.InvalidValueError, match=r"limits must be two numbers \(min, max\), not 3"):
+        hystcomp.Compensator(table1, "ihc", limits=[0.0, 1.0, 2.0])
+    # Any sequence of two numbers will do.
+    assert hystcomp.Compensator(table1, "ihc", limits=[1, 9]).limits == (1.0, 9.0)
+    assert hystcomp.Compensator(table1, "ihc", limits=np.array([2.0, 8.0])).limits == (2.0, 8.0)
     # Far beyond its identified range the cubic term folds Table 1 over.
     with pytest.raises(hystcomp.NotInvertibleError, match="not invertible"):
         hystcomp.Compensator(table1, "ihc", limits=(0.0, 30.0))

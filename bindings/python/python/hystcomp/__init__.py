@@ -22,7 +22,7 @@ Errors are ``HystcompError`` subclasses (also ``ValueError``) or ``OSError`` for
 
 from __future__ import annotations
 
-from typing import Optional, Tuple
+from typing import Optional, Sequence
 
 from ._errors import (
     HystcompError,
@@ -94,7 +94,7 @@ class Ihc(Compensator):
     implementations do; by default the implicit equation is solved exactly each sample.
     """
 
-    def __new__(cls, model, limits: Optional[Tuple[float, float]] = None, *, delayed: bool = False):
+    def __new__(cls, model, limits: Optional[Sequence[float]] = None, *, delayed: bool = False):
         return super().__new__(cls, model, "ihc-delayed" if delayed else "ihc", limits)
 
 
@@ -106,7 +106,7 @@ class Wihc(Compensator):
     equation is solved exactly each sample.
     """
 
-    def __new__(cls, model, limits: Optional[Tuple[float, float]] = None, *, delayed: bool = False):
+    def __new__(cls, model, limits: Optional[Sequence[float]] = None, *, delayed: bool = False):
         return super().__new__(cls, model, "wihc-delayed" if delayed else "wihc", limits)
 
 
@@ -114,5 +114,5 @@ class Dihc(Compensator):
     """Direct inverse hysteresis compensation (section 3.3, eq. (10)) from an inverse model:
     ``Compensator(model, "dihc", limits)``."""
 
-    def __new__(cls, model, limits: Optional[Tuple[float, float]] = None):
+    def __new__(cls, model, limits: Optional[Sequence[float]] = None):
         return super().__new__(cls, model, "dihc", limits)

@@ -80,7 +80,7 @@ class ModelFile:
         *,
         input: Optional[Scale] = None,
         output: Optional[Scale] = None,
-        input_range: Tuple[float, float] = (0.0, 1.0),
+        input_range: Sequence[float] = (0.0, 1.0),
         description: Optional[str] = None,
     ) -> None: ...
     @staticmethod
@@ -125,10 +125,10 @@ class Compensator:
         self,
         model: Union[ModelFile, PathLike],
         method: str = "ihc",
-        limits: Optional[Tuple[float, float]] = None,
+        limits: Optional[Sequence[float]] = None,
     ) -> None: ...
     @staticmethod
-    def from_mpim(model: Mpim, method: str = "ihc", limits: Tuple[float, float] = (0.0, 1.0)) -> Compensator:
+    def from_mpim(model: Mpim, method: str = "ihc", limits: Sequence[float] = (0.0, 1.0)) -> Compensator:
         """A compensator in normalised units."""
     def step(self, y_d: float) -> float: ...
     def process(self, y_d: ArrayLike) -> FloatArray: ...
