@@ -952,12 +952,6 @@ pub unsafe extern "C" fn hystcomp_mpim_free(m: *mut HystcompMpim) {
     }));
 }
 
-/// The README examples of the bindings (`docs/bindings-readme-snippets.md`), compiled and run as
-/// doctests so that they cannot go stale.
-#[cfg(doctest)]
-#[doc = include_str!("../../../docs/bindings-readme-snippets.md")]
-pub struct ReadmeSnippets;
-
 /// The Rust example of `docs/microcontroller.md`, compiled and run as a doctest.
 #[cfg(doctest)]
 #[doc = include_str!("../../../docs/microcontroller.md")]

@@ -3,8 +3,9 @@
 //! `P[C[y_d]] = y_d` holds, every voltage stays within the limits, and bad input gives a status
 //! and a message.
 //!
-//! The static library is built in its own target directory (`target/c-build`): a nested cargo
-//! build in the directory the outer `cargo test` holds would wait for its lock forever.
+//! The static library is built by a nested cargo in the outer build's target directory (it is
+//! usually fresh already: `cargo test` builds the library's every crate type); the examples are
+//! compiled into `<target>/c-examples`.
 
 mod support;
 
@@ -12,18 +13,17 @@ use std::path::PathBuf;
 use std::process::Command;
 use std::sync::OnceLock;
 
-use support::{available, cargo, run, workspace_root};
+use support::{available, cargo, run, target_dir, workspace_root};
 
 /// Builds the static library once; its path.
 fn static_library() -> &'static PathBuf {
     static LIBRARY: OnceLock<PathBuf> = OnceLock::new();
     LIBRARY.get_or_init(|| {
         let root = workspace_root();
-        let target_dir = root.join("target/c-build");
+        let target_dir = target_dir();
         run(
             cargo()
                 .current_dir(&root)
-                .env("CARGO_TARGET_DIR", &target_dir)
                 .args(["build", "--quiet", "-p", "hystcomp-c", "--lib"]),
             "the static library of bindings/c must build",
         );
@@ -42,7 +42,9 @@ fn compile_example(name: &str) -> PathBuf {
         available("gcc"),
         "gcc is needed to compile examples/c (apt-get install gcc)"
     );
-    let program = root.join("target/c-build").join(name);
+    let examples = target_dir().join("c-examples");
+    std::fs::create_dir_all(&examples).expect("the examples' directory can be created");
+    let program = examples.join(name);
     run(
         Command::new("gcc")
             .current_dir(&root)
@@ -72,17 +74,16 @@ fn round_trip_program() -> &'static PathBuf {
 #[test]
 fn readme_c_example_is_examples_c_minimal_and_runs() {
     let root = workspace_root();
-    let snippets = std::fs::read_to_string(root.join("docs/bindings-readme-snippets.md"))
-        .expect("docs/bindings-readme-snippets.md exists");
+    let snippets = std::fs::read_to_string(root.join("README.md")).expect("README.md exists");
     let block = snippets
         .split("```c\n")
         .nth(1)
         .and_then(|rest| rest.split("```").next())
-        .expect("the snippets have a ```c block");
+        .expect("the README has a ```c block");
     let minimal = std::fs::read_to_string(root.join("examples/c/minimal.c")).unwrap();
     assert_eq!(
         block, minimal,
-        "the C block of docs/bindings-readme-snippets.md must be examples/c/minimal.c verbatim"
+        "the C block of README.md must be examples/c/minimal.c verbatim"
     );
     let output = run(
         Command::new(compile_example("minimal")).current_dir(&root),

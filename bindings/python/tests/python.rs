@@ -3,9 +3,9 @@
 //!
 //! 1. Finds or creates the virtual environment `target/python-venv` (`python3 -m venv`, then
 //!    `pip install maturin numpy pytest` from the package index) unless it already has them.
-//! 2. `maturin develop` builds `bindings/python` and installs it into that environment, with
-//!    its own cargo target directory `target/python-build`: a nested cargo build in the
-//!    directory the outer `cargo test` holds would wait for its lock forever.
+//! 2. `maturin develop` builds `bindings/python` and installs it into that environment, in the
+//!    outer build's target directory, so that it reuses what `cargo test` compiled (cargo
+//!    holds its lock while it builds, not while the test binaries run).
 //! 3. `python -m pytest bindings/python/tests -q`; a failure shows pytest's output.
 //!
 //! `HYSTCOMP_PYTHON` names another interpreter than `python3` for creating the environment.
@@ -19,6 +19,15 @@ fn workspace_root() -> PathBuf {
         .join("../..")
         .canonicalize()
         .expect("the workspace root exists")
+}
+
+/// The target directory of the outer `cargo test` (`CARGO_TARGET_DIR`, or `target/`).
+fn target_dir(root: &Path) -> PathBuf {
+    match std::env::var_os("CARGO_TARGET_DIR").map(PathBuf::from) {
+        Some(dir) if dir.is_absolute() => dir,
+        Some(dir) => root.join(dir),
+        None => root.join("target"),
+    }
 }
 
 fn describe(output: &Output) -> String {
@@ -112,7 +121,7 @@ fn python_package_passes_pytest() {
             ])
             .env("VIRTUAL_ENV", &venv)
             .env("PATH", &path)
-            .env("CARGO_TARGET_DIR", root.join("target/python-build"))
+            .env("CARGO_TARGET_DIR", target_dir(&root))
             .env_remove("CARGO_BUILD_TARGET")
             .env_remove("PYTHONHOME"),
         "building and installing the Python package (maturin develop)",

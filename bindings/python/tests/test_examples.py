@@ -9,13 +9,13 @@ import pytest
 
 from conftest import DBO_DATA, ROOT
 
-SNIPPETS = ROOT / "docs" / "bindings-readme-snippets.md"
+SNIPPETS = ROOT / "README.md"
 EXAMPLE = ROOT / "examples" / "python" / "identify_and_compensate.py"
 
 
 def test_readme_python_example_runs_as_written(monkeypatch, capsys):
     blocks = re.findall(r"```python\n(.*?)```", SNIPPETS.read_text(), flags=re.S)
-    assert len(blocks) == 1, "docs/bindings-readme-snippets.md has one Python example"
+    assert len(blocks) == 1, "README.md has one Python example"
     monkeypatch.chdir(ROOT)  # the example's paths are relative to the repository's root
     exec(compile(blocks[0], str(SNIPPETS), "exec"), {"__name__": "__readme__"})
     assert capsys.readouterr().out.startswith("TrackingIndices(e_mhe=")

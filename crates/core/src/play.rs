@@ -12,7 +12,7 @@ pub(crate) fn one_sided<T: Real>(input: T, threshold: T, memory: T) -> T {
     if raised > input { input } else { raised }
 }
 
-/// The one-sided play operator `F_r` of eqs. (1)-(2) (Gu, Zhu & Su 2014, ref. [9] of the paper):
+/// The one-sided play operator `F_r` of eqs. (1)-(2) (Gu, Zhu & Su 2014, ref. \[9\] of the paper):
 /// a piston of length `r` whose output lags the input by at most `r`, from below:
 /// `F_r[x](t) = f_r(x(t), F_r[x](t_i))` with `f_r(v, w) = max(v - r, min(v, w))`.
 ///

@@ -5,7 +5,7 @@
 //! - [`identify`]: (voltage, displacement) samples in, a [`ModelFile`](hystcomp_io::model_file::ModelFile)
 //!   and a [`FitReport`] out, as a **plant** model (voltage to displacement, for IHC and WIHC)
 //!   or an **inverse** model (displacement to voltage, for DIHC, section 3.3).
-//! - [`crossval`]: identify both on one record; on another, report the forward prediction
+//! - [`crossval()`]: identify both on one record; on another, report the forward prediction
 //!   error and the offline inverse replay error of every compensator.
 //!
 //! # One problem, two solvers
@@ -16,7 +16,7 @@
 //!
 //! - [`LeastSquares`] (`ls`, the default): the exact global optimum for those thresholds
 //!   (QR, then a QP with Clarabel when a constraint binds, then an exact active-set solve);
-//! - [`ParticleSwarm`] (`pso`): the paper's method (its ref. [39]), seeded and reproducible,
+//! - [`ParticleSwarm`] (`pso`): the paper's method (its ref. \[39\]), seeded and reproducible,
 //!   with an optional least-squares polish.
 //!
 //! Solvers report progress to an [`Observer`] (the command line attaches a progress bar);
@@ -51,13 +51,13 @@
 //! ```
 #![warn(missing_docs)]
 
-mod crossval;
+pub mod crossval;
 mod error;
 mod identification;
-mod ls;
+pub mod ls;
 mod options;
 pub mod problem;
-mod pso;
+pub mod pso;
 mod report;
 mod solver;
 

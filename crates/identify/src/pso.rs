@@ -1,5 +1,5 @@
 //! Particle swarm optimisation of the fitting problem, as the paper identifies its models
-//! (section 4.2, after its ref. [39]: Yang, Gu & Zhu, *Sensors and Actuators A* **189** (2013)
+//! (section 4.2, after its ref. \[39\]: Yang, Gu & Zhu, *Sensors and Actuators A* **189** (2013)
 //! 254-265, doi:10.1016/j.sna.2012.09.021).
 //!
 //! A global-best swarm (Kennedy & Eberhart, "Particle swarm optimization", Proc. ICNN 1995,

@@ -13,13 +13,31 @@ pub fn workspace_root() -> PathBuf {
         .expect("the workspace root exists")
 }
 
+/// The target directory of the outer `cargo test` (`CARGO_TARGET_DIR`, or `target/` in the
+/// workspace). A nested `cargo build` may share it: cargo holds its lock while it builds, not
+/// while the test binaries run, and builds of other feature sets get other artifact hashes.
+/// Sharing it means the nested build reuses what `cargo test` already compiled.
+pub fn target_dir() -> PathBuf {
+    std::env::var_os("CARGO_TARGET_DIR")
+        .map(PathBuf::from)
+        .map(|dir| {
+            if dir.is_absolute() {
+                dir
+            } else {
+                workspace_root().join(dir)
+            }
+        })
+        .unwrap_or_else(|| workspace_root().join("target"))
+}
+
 /// The cargo that runs these tests (or `cargo` from the PATH).
 pub fn cargo() -> Command {
     let cargo = std::env::var_os("CARGO").unwrap_or_else(|| "cargo".into());
     let mut command = Command::new(cargo);
-    // A nested build must not inherit the outer build's target directory or target triple.
+    // A nested build shares the outer build's target directory (see `target_dir`), not its
+    // target triple or flags.
     command
-        .env_remove("CARGO_TARGET_DIR")
+        .env("CARGO_TARGET_DIR", target_dir())
         .env_remove("CARGO_BUILD_TARGET")
         .env_remove("RUSTFLAGS")
         .env_remove("CARGO_ENCODED_RUSTFLAGS");
