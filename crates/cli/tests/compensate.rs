@@ -68,14 +68,14 @@ fn every_method_writes_the_drive_and_exact_ones_recover_the_voltage() {
         let cols = read(&out);
         assert_eq!(cols[0].len(), 2000);
         assert_eq!(cols[0][1999], 1.999, "time column kept");
-        for &v in &cols[2] {
+        for &v in &cols[1] {
             assert!(
                 (0.0..=10.0).contains(&v),
                 "{method}: drive {v} V outside 0..10 V"
             );
         }
         if method == "ihc" || method == "wihc" {
-            for (v, v_true) in cols[2].iter().zip(&volts) {
+            for (v, v_true) in cols[1].iter().zip(&volts) {
                 assert!((v - v_true).abs() < 1e-7, "{method}: {v} vs {v_true}");
             }
         }
@@ -115,7 +115,7 @@ fn json_report_and_saturation_exit_codes() {
     let saturated = report["saturated"].as_u64().unwrap();
     assert!(saturated > 0 && saturated < 500, "{report}");
     // The clamped output is written all the same, within the limits.
-    for v in &read(&out)[2] {
+    for v in &read(&out)[1] {
         assert!((0.0..=10.0).contains(v));
     }
     let mut allowed = args.to_vec();
@@ -126,7 +126,7 @@ fn json_report_and_saturation_exit_codes() {
     let mut narrow = args.to_vec();
     narrow.extend(["--limits", "1:6", "--allow-saturation"]);
     assert!(hystcomp(&narrow).status.success());
-    for v in &read(&out)[2] {
+    for v in &read(&out)[1] {
         assert!((1.0..=6.0).contains(v), "{v}");
     }
 }

@@ -200,3 +200,62 @@ fn evaluate_computes_the_three_indices_and_refuses_bad_records() {
         "bin",
     );
 }
+
+/// The README's command-line chain: a model from `reproduce`, `compensate` the paper's
+/// trajectory, `simulate` the stage, `evaluate` the last period: the same compensation the
+/// study measures.
+#[test]
+fn compensate_simulate_evaluate_chain_tracks_the_paper_trajectory() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("report");
+    let o = hystcomp(&["reproduce", "--out", s(&out), "--pso-iterations", "10"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let trajectory = hystcomp_experiments::Reference::paper().trajectory();
+    let (time, desired) = trajectory.sample(10_000.0, 200_000);
+    let desired_file = dir.path().join("desired.csv");
+    hystcomp_io::data::write_csv(&desired_file, &["time_s", "desired_um"], &[&time, &desired])
+        .unwrap();
+    let drive = dir.path().join("drive.csv");
+    let model = out.join("models/exact-plant.json");
+    let o = hystcomp(&[
+        "compensate",
+        "--model",
+        s(&model),
+        "--method",
+        "ihc",
+        "--trajectory",
+        s(&desired_file),
+        "-o",
+        s(&drive),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let stage = dir.path().join("stage.csv");
+    let o = hystcomp(&[
+        "simulate",
+        "--input",
+        s(&drive),
+        "-o",
+        s(&stage),
+        "--seed",
+        "2",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(!stderr(&o).contains("clamped"), "{}", stderr(&o));
+    let o = hystcomp(&[
+        "evaluate",
+        "--desired",
+        s(&desired_file),
+        "--measured",
+        s(&stage),
+        "--measured-column",
+        "measured_position_um",
+        "--rows",
+        "100001..200000",
+        "--json",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let json: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    let e_mhe = json["e_mhe_percent"].as_f64().unwrap();
+    let e_rms = json["e_rms_percent"].as_f64().unwrap();
+    assert!(e_mhe <= 3.0 && e_rms <= 0.75, "{json}");
+}

@@ -23,7 +23,8 @@ pub struct Args {
     /// column (s) and a desired position column (in the model's displacement unit).
     #[arg(long, value_name = "FILE")]
     trajectory: PathBuf,
-    /// Where to write the drive signal (CSV: time, desired position, drive voltage).
+    /// Where to write the drive signal (CSV: time, drive voltage, desired position; the drive
+    /// is the second column, which `hystcomp simulate` reads by default).
     #[arg(short, long, value_name = "FILE")]
     output: PathBuf,
     /// Time column of the trajectory, by name or 1-based index.
@@ -121,8 +122,8 @@ pub fn run(args: &Args, ctx: Context) -> Result<(), CliError> {
     let control_name = format!("drive_{}", compensator.control_unit());
     data::write_csv(
         &args.output,
-        &[&time_name, &desired_name, &control_name],
-        &[time, desired, &control],
+        &[&time_name, &control_name, &desired_name],
+        &[time, &control, desired],
     )
     .map_err(|e| CliError::output(e.to_string()))?;
 
@@ -147,7 +148,7 @@ pub fn run(args: &Args, ctx: Context) -> Result<(), CliError> {
         crate::print_json(&report)?;
     } else {
         println!(
-            "{}: {} samples through {} -> {} (drive {:.4} .. {:.4} {}, limits {} .. {} {})",
+            "{}: {} samples through {} -> {} (drive {:.4} .. {:.4} {}, limits {:.4} .. {:.4} {})",
             report.trajectory,
             report.samples,
             report.method,
@@ -163,7 +164,7 @@ pub fn run(args: &Args, ctx: Context) -> Result<(), CliError> {
     if report.saturated > 0 {
         let message = format!(
             "{} of {} desired positions lie outside what the model can reach within the drive \
-             limits {} .. {} {} (first at t = {} s); the drive was clamped to the limits there. \
+             limits {:.4} .. {:.4} {} (first at t = {} s); the drive was clamped to the limits there. \
              Scale the trajectory into the stage's range or widen --limits{}",
             report.saturated,
             report.samples,
