@@ -350,14 +350,7 @@ impl ModelFile {
         inputs: ArrayIn<'py>,
     ) -> PyResult<Bound<'py, PyArray1<f64>>> {
         let inputs = finite_values(&inputs, "inputs")?;
-        let mut model = self.inner.model().map_err(errors::model_file)?;
-        let outputs = inputs
-            .iter()
-            .map(|&x| {
-                self.inner
-                    .output_to_physical(model.step(self.inner.normalise_input(x)))
-            })
-            .collect();
+        let outputs = self.inner.predict(&inputs).map_err(errors::model_file)?;
         Ok(array_out(py, outputs))
     }
 

@@ -486,24 +486,15 @@ pub fn run_study(
         })?;
         let model_mismatch_rms_percent = match (method, model) {
             (Some(m), Some(model)) if m.needs() == Direction::Plant => {
-                let file = &model.model;
-                let mut plant = file
-                    .model()
+                let predicted = model
+                    .model
+                    .predict(&command_v)
                     .map_err(|e| StudyError::Option(e.to_string()))?;
                 let range = indices_range(&desired[evaluation_start..]);
-                let sum: f64 = command_v
+                let sum: f64 = predicted[evaluation_start..]
                     .iter()
-                    .zip(&measured)
-                    .enumerate()
-                    .map(|(k, (&v, &y))| {
-                        let predicted =
-                            file.output_to_physical(plant.step(file.normalise_input(v)));
-                        if k >= evaluation_start {
-                            (predicted - y).powi(2)
-                        } else {
-                            0.0
-                        }
-                    })
+                    .zip(&measured[evaluation_start..])
+                    .map(|(p, y)| (p - y).powi(2))
                     .sum();
                 Some((sum / per_period as f64).sqrt() / range * 100.0)
             }

@@ -198,12 +198,7 @@ pub fn validate_models(
     let displacement_range = range_of(&test.displacement[span.clone()]);
 
     // (a) Forward prediction.
-    let mut model = plant.model()?;
-    let predicted: Vec<f64> = test
-        .voltage
-        .iter()
-        .map(|&v| plant.output_to_physical(model.step(plant.normalise_input(v))))
-        .collect();
+    let predicted = plant.predict(test.voltage)?;
     let forward = ErrorStats::new(
         &predicted[span.clone()],
         &test.displacement[span.clone()],

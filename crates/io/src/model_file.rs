@@ -346,6 +346,16 @@ impl ModelFile {
         })
     }
 
+    /// Runs the model over a whole record in physical units, from zero memory (eq. (1)):
+    /// `output[k] = output.offset + output.scale * P[(input[k] - input.offset) / input.scale]`.
+    pub fn predict(&self, input: &[f64]) -> Result<Vec<f64>, ModelFileError> {
+        let mut model = self.model()?;
+        Ok(input
+            .iter()
+            .map(|&x| self.output_to_physical(model.step(self.normalise_input(x))))
+            .collect())
+    }
+
     /// The normalised value of a physical model input.
     pub fn normalise_input(&self, physical: f64) -> f64 {
         self.input.normalise(physical)

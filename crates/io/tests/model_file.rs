@@ -132,3 +132,30 @@ fn unreadable_and_malformed_files_name_the_path() {
         "{err}"
     );
 }
+
+#[test]
+fn predict_runs_the_model_in_physical_units_from_zero_memory() {
+    let file = ModelFile::load(&example("table1-plant.json")).unwrap();
+    let volts: Vec<f64> = (0..500)
+        .map(|k| 5.0 + 4.9 * (k as f64 * 0.03).sin())
+        .collect();
+    let predicted = file.predict(&volts).unwrap();
+    let mut model = file.model().unwrap();
+    for (v, y) in volts.iter().zip(&predicted) {
+        // physical = offset + scale * P[(v - offset) / scale]
+        let expected = file.output.offset
+            + file.output.scale * model.step((v - file.input.offset) / file.input.scale);
+        assert_eq!(*y, expected);
+    }
+    // From rest, a rise to full scale ends on the major loop's top: 75 um x P[1].
+    let top = file.predict(&[2.5, 5.0, 7.5, 10.0]).unwrap()[3];
+    assert!(
+        (top - 75.0
+            * hystcomp_core::paper::TABLE1
+                .model::<f64, Vec<f64>>()
+                .unwrap()
+                .step(1.0))
+        .abs()
+            < 1e-9
+    );
+}
