@@ -40,20 +40,27 @@ pub(crate) trait SegmentEquation<T: Real> {
     fn root(&self, lo: T, hi: T, f_lo: T, f_hi: T, alpha: T, beta: T, inverse_alpha: T) -> T;
 }
 
-/// The input of the bank that solves the equation, and whether the limits cut it short.
+/// A linear piece of the bank: its output is `alpha x + beta` there, with the first `moving`
+/// operators moving with the input, up (`rising`) or down.
 #[derive(Debug, Clone, Copy)]
-pub(crate) struct Solution<T> {
-    pub input: T,
-    pub saturated: bool,
-    /// The segment the solution lies on: the bank's output there is `alpha x + beta`.
+pub(crate) struct Segment<T> {
     pub alpha: T,
     pub beta: T,
-    /// How many operators (the first ones) move on that segment.
+    /// How many operators (the first ones) move on the segment.
     pub moving: usize,
     /// Whether the walk went up (the moving operators sit at the upper edge of their band) or
     /// down (at the lower edge). A solution at a limit may lie an ulp the other side of the
     /// previous input; the direction of the walk is what counts.
     pub rising: bool,
+}
+
+/// The input of the bank that solves the equation, whether the limits cut it short, and the
+/// segment it lies on.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct Solution<T> {
+    pub input: T,
+    pub saturated: bool,
+    pub segment: Segment<T>,
 }
 
 /// A bank of one-sided play operators with a linear term, `a x + sum_i b_i F_{r_i}[x]`, and
@@ -214,17 +221,28 @@ impl<T: Real, B: Buffer<T>> PlayBank<T, B> {
         // Operators beyond the moving ones hold their memory, away from the edge of their band
         // on the side the input went; only the zero-threshold ones sit on both edges. (When the
         // input did not move, these counts can only be too small, which the walk tolerates.)
-        if solution.rising {
-            self.rising_active = solution.moving;
+        if solution.segment.rising {
+            self.rising_active = solution.segment.moving;
             self.falling_active = self.always_active;
         } else {
-            self.falling_active = solution.moving;
+            self.falling_active = solution.segment.moving;
             self.rising_active = self.always_active;
         }
         self.input = x;
         // On the segment the bank's output is alpha x + beta = a x + memory sum.
-        self.memory_sum = (solution.alpha - self.a) * x + solution.beta;
-        solution.alpha * x + solution.beta
+        let Segment { alpha, beta, .. } = solution.segment;
+        self.memory_sum = (alpha - self.a) * x + beta;
+        alpha * x + beta
+    }
+
+    /// `1 / (a + b_1 + ... + b_k)`, the reciprocal slope of the segment with `k` moving.
+    #[inline(always)]
+    fn inverse_alpha(&self, k: usize) -> T {
+        if k == 0 {
+            self.inverse_a
+        } else {
+            self.inverse_alpha.as_ref()[k - 1]
+        }
     }
 
     /// Walks the segments of the bank from the last input (where the residual is `f_prev`) in
@@ -248,114 +266,85 @@ impl<T: Real, B: Buffer<T>> PlayBank<T, B> {
         };
         // The moving operators contribute b_i x to the output: w_i + r_i = x_prev rising,
         // w_i = x_prev falling, so their held part is b_i x_prev either way.
-        let moving = if active == 0 {
+        let moving_weight = if active == 0 {
             T::zero()
         } else {
             self.prefix.as_ref()[active - 1]
         };
-        let mut alpha = self.a + moving;
-        let mut beta = self.memory_sum - moving * x_prev;
-        let inverse_alpha = |k: usize| {
-            if k == 0 {
-                self.inverse_a
-            } else {
-                self.inverse_alpha.as_ref()[k - 1]
-            }
+        let mut segment = Segment {
+            alpha: self.a + moving_weight,
+            beta: self.memory_sum - moving_weight * x_prev,
+            moving: active,
+            rising,
+        };
+        let root = |lo: T, hi: T, f_lo: T, f_hi: T, s: &Segment<T>| {
+            equation.root(
+                lo,
+                hi,
+                f_lo,
+                f_hi,
+                s.alpha,
+                s.beta,
+                self.inverse_alpha(s.moving),
+            )
+        };
+        let found = |input: T, saturated: bool, segment: Segment<T>| Solution {
+            input,
+            saturated,
+            segment,
         };
         if rising {
             let (mut lo, mut f_lo) = (x_prev, f_prev);
             let v_max = limits.max();
-            let mut moving = active;
             for i in active..weights.len() {
                 let (w, r, b) = (memory[i], thresholds[i], weights[i]);
                 let u = (w + r).max(lo);
-                if equation.control(u, alpha, beta) >= v_max {
+                if equation.control(u, segment.alpha, segment.beta) >= v_max {
                     break;
                 }
-                let f_u = equation.residual(u, alpha, beta);
+                let f_u = equation.residual(u, segment.alpha, segment.beta);
                 if f_u >= T::zero() {
-                    return Solution {
-                        input: equation.root(lo, u, f_lo, f_u, alpha, beta, inverse_alpha(moving)),
-                        saturated: false,
-                        alpha,
-                        beta,
-                        moving,
-                        rising: true,
-                    };
+                    return found(root(lo, u, f_lo, f_u, &segment), false, segment);
                 }
-                moving = i + 1;
-                alpha = alpha + b;
-                beta = beta - b * (r + w);
+                // Operator i starts moving at u: b_i w_i becomes b_i (x - r_i).
+                segment.moving = i + 1;
+                segment.alpha = segment.alpha + b;
+                segment.beta = segment.beta - b * (r + w);
                 lo = u;
                 f_lo = f_u;
             }
-            let end = equation.input_at_control(v_max, alpha, beta);
-            let f_end = equation.residual(end, alpha, beta);
+            let end = equation.input_at_control(v_max, segment.alpha, segment.beta);
+            let f_end = equation.residual(end, segment.alpha, segment.beta);
             if f_end < T::zero() {
-                return Solution {
-                    input: end,
-                    saturated: true,
-                    alpha,
-                    beta,
-                    moving,
-                    rising: true,
-                };
+                return found(end, true, segment);
             }
-            Solution {
-                input: equation.root(lo, end, f_lo, f_end, alpha, beta, inverse_alpha(moving)),
-                saturated: false,
-                alpha,
-                beta,
-                moving,
-                rising: true,
-            }
+            found(root(lo, end, f_lo, f_end, &segment), false, segment)
         } else {
             let (mut hi, mut f_hi) = (x_prev, f_prev);
             let v_min = limits.min();
-            let mut moving = active;
             for i in active..weights.len() {
                 let (w, b) = (memory[i], weights[i]);
                 let l = w.min(hi);
-                if equation.control(l, alpha, beta) <= v_min {
+                if equation.control(l, segment.alpha, segment.beta) <= v_min {
                     break;
                 }
-                let f_l = equation.residual(l, alpha, beta);
+                let f_l = equation.residual(l, segment.alpha, segment.beta);
                 if f_l <= T::zero() {
-                    return Solution {
-                        input: equation.root(l, hi, f_l, f_hi, alpha, beta, inverse_alpha(moving)),
-                        saturated: false,
-                        alpha,
-                        beta,
-                        moving,
-                        rising: false,
-                    };
+                    return found(root(l, hi, f_l, f_hi, &segment), false, segment);
                 }
-                moving = i + 1;
-                alpha = alpha + b;
-                beta = beta - b * w;
+                // Operator i starts moving at l: b_i w_i becomes b_i x.
+                segment.moving = i + 1;
+                segment.alpha = segment.alpha + b;
+                segment.beta = segment.beta - b * w;
                 hi = l;
                 f_hi = f_l;
             }
-            let end = equation.input_at_control(v_min, alpha, beta);
-            let f_end = equation.residual(end, alpha, beta);
+            let end = equation.input_at_control(v_min, segment.alpha, segment.beta);
+            let f_end = equation.residual(end, segment.alpha, segment.beta);
             if f_end > T::zero() {
-                return Solution {
-                    input: end,
-                    saturated: true,
-                    alpha,
-                    beta,
-                    moving,
-                    rising: false,
-                };
+                return found(end, true, segment);
             }
-            Solution {
-                input: equation.root(end, hi, f_end, f_hi, alpha, beta, inverse_alpha(moving)),
-                saturated: false,
-                alpha,
-                beta,
-                moving,
-                rising: false,
-            }
+            found(root(end, hi, f_end, f_hi, &segment), false, segment)
         }
     }
 }
