@@ -50,6 +50,15 @@ impl Method {
         }
     }
 
+    /// How the implicit law is solved: exactly, or with the loop broken by one sample (DIHC has
+    /// no implicit law; it reports `Exact`).
+    pub fn solve_mode(self) -> SolveMode {
+        match self {
+            Method::IhcDelayed | Method::WihcDelayed => SolveMode::Delayed,
+            _ => SolveMode::Exact,
+        }
+    }
+
     /// The direction of model the method needs: a plant model for IHC and WIHC, an inverse
     /// model for DIHC.
     pub fn needs(self) -> Direction {
@@ -210,25 +219,15 @@ impl ScaledCompensator {
         let mpim: Mpim<f64, Vec<f64>> =
             Mpim::new(&model.thresholds, &model.weights, model.a1, model.a2)?;
         let inner: Box<dyn Compensator<f64> + Send> = match method {
-            Method::Ihc => Box::new(Ihc::<f64, Vec<f64>>::new(
+            Method::Ihc | Method::IhcDelayed => Box::new(Ihc::<f64, Vec<f64>>::new(
                 &mpim,
                 normalised,
-                SolveMode::Exact,
+                method.solve_mode(),
             )?),
-            Method::IhcDelayed => Box::new(Ihc::<f64, Vec<f64>>::new(
+            Method::Wihc | Method::WihcDelayed => Box::new(Wihc::<f64, Vec<f64>>::new(
                 &mpim,
                 normalised,
-                SolveMode::Delayed,
-            )?),
-            Method::Wihc => Box::new(Wihc::<f64, Vec<f64>>::new(
-                &mpim,
-                normalised,
-                SolveMode::Exact,
-            )?),
-            Method::WihcDelayed => Box::new(Wihc::<f64, Vec<f64>>::new(
-                &mpim,
-                normalised,
-                SolveMode::Delayed,
+                method.solve_mode(),
             )?),
             Method::Dihc => Box::new(Dihc::<f64, Vec<f64>>::new(
                 &mpim,
