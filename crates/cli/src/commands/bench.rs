@@ -9,6 +9,7 @@ use std::path::PathBuf;
 use std::time::Instant;
 
 use hystcomp_core::{Compensator, Dihc, Ihc, Mpim, OutputLimits, Real, SolveMode, Wihc, paper};
+use hystcomp_experiments::Reference;
 use hystcomp_io::model_file::{Direction, ModelFile};
 use serde::Serialize;
 
@@ -68,19 +69,17 @@ fn time(samples: usize, repeats: usize, mut run: impl FnMut()) -> (f64, f64) {
     (per_sample[per_sample.len() / 2], per_sample[0])
 }
 
-/// The paper's trajectory shape in normalised voltage, through `plant`: every desired sample
-/// is reachable.
+/// One period of the paper's trajectory (section 4.3) mapped onto the normalised voltage range
+/// 0.1 .. 0.9, through `plant`: every desired sample is reachable.
 fn trajectory<T: Real>(plant: &Mpim<T, Vec<T>>, samples: usize) -> (Vec<T>, Vec<T>) {
+    let reference = Reference::paper();
+    let [lo, hi] = reference.trajectory.range_um;
+    let rate_hz = samples as f64 / reference.trajectory.period_s;
+    let (_, positions) = reference.trajectory().sample(rate_hz, samples);
     let mut p = plant.clone();
-    let volts: Vec<T> = (0..samples)
-        .map(|k| {
-            let t = k as f64 / samples as f64 * 10.0;
-            T::from_f64(
-                0.5 + 0.14 * (std::f64::consts::PI * t + 2.6).sin()
-                    + 0.14 * (1.6 * std::f64::consts::PI * t + 3.0).sin()
-                    + 0.2 * (2.0 * std::f64::consts::PI * t + 1.5).sin(),
-            )
-        })
+    let volts: Vec<T> = positions
+        .iter()
+        .map(|y| T::from_f64(0.1 + 0.8 * (y - lo) / (hi - lo)))
         .collect();
     let desired = volts.iter().map(|&v| p.step(v)).collect();
     (volts, desired)
