@@ -67,18 +67,14 @@ pub fn run(args: &Args, ctx: Context) -> Result<(), CliError> {
         &options,
     )?;
     let (d, y) = (&desired.values[0], &measured.values[0]);
-    if d.len() != y.len() {
-        return Err(CliError::input(format!(
-            "{} has {} samples but {} has {}; the indices compare the records sample by sample: \
-             give records of equal length (or select the same --rows)",
-            args.desired.display(),
-            d.len(),
+    // The indices check the pair (equal lengths, a desired range that is not zero, bins).
+    let indices = TrackingIndices::compute(d, y, args.bins).map_err(|e| {
+        CliError::from(e).context(format!(
+            "{} against {}",
             args.measured.display(),
-            y.len()
-        )));
-    }
-    data::check_not_constant(&desired.names[0], d)?;
-    let indices = TrackingIndices::compute(d, y, args.bins)?;
+            args.desired.display()
+        ))
+    })?;
     let range = d
         .iter()
         .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &v| {
