@@ -205,20 +205,8 @@ pub fn validate_models(
         displacement_range,
     )
     .expect("the evaluated span is not empty");
-    let [lo, hi] = plant.input_range;
-    let voltage_outside_model_range = test
-        .voltage
-        .iter()
-        .map(|&v| plant.normalise_input(v))
-        .filter(|x| *x < lo || *x > hi)
-        .count();
-    let [ilo, ihi] = inverse.input_range;
-    let displacement_outside_model_range = test
-        .displacement
-        .iter()
-        .map(|&y| inverse.normalise_input(y))
-        .filter(|x| *x < ilo || *x > ihi)
-        .count();
+    let voltage_outside_model_range = plant.count_outside_input_range(test.voltage);
+    let displacement_outside_model_range = inverse.count_outside_input_range(test.displacement);
 
     // (b) Offline inverse replay: the measured displacement as y_d, in physical units, through
     // each compensator built from its model file (the scaling is the io crate's, as everywhere).

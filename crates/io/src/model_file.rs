@@ -356,6 +356,17 @@ impl ModelFile {
             .collect())
     }
 
+    /// How many of the physical `inputs` lie outside the range the model was identified on
+    /// (`input_range`, normalised).
+    pub fn count_outside_input_range(&self, inputs: &[f64]) -> usize {
+        let [lo, hi] = self.input_range;
+        inputs
+            .iter()
+            .map(|&x| self.normalise_input(x))
+            .filter(|x| *x < lo || *x > hi)
+            .count()
+    }
+
     /// The normalised value of a physical model input.
     pub fn normalise_input(&self, physical: f64) -> f64 {
         self.input.normalise(physical)

@@ -147,6 +147,11 @@ fn predict_runs_the_model_in_physical_units_from_zero_memory() {
             + file.output.scale * model.step((v - file.input.offset) / file.input.scale);
         assert_eq!(*y, expected);
     }
+    // The model was identified on 0..10 V (normalised 0..1).
+    assert_eq!(
+        file.count_outside_input_range(&[-0.1, 0.0, 5.0, 10.0, 10.5]),
+        2
+    );
     // From rest, a rise to full scale ends on the major loop's top: 75 um x P[1].
     let top = file.predict(&[2.5, 5.0, 7.5, 10.0]).unwrap()[3];
     assert!(
