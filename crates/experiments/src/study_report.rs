@@ -9,7 +9,7 @@ use hystcomp_io::atomic::write_atomic;
 use serde::Serialize;
 
 use crate::figures::{
-    self, FigureError, LABEL_ACTUAL_POSITION, LABEL_DESIRED_POSITION, LABEL_POSITION,
+    self, FigureError, FigureFiles, LABEL_ACTUAL_POSITION, LABEL_DESIRED_POSITION, LABEL_POSITION,
     LABEL_TRACKING_ERROR, Panel,
 };
 use crate::reference::ReferenceIndices;
@@ -501,6 +501,49 @@ fn model_parameters(id: &Identification, solver: &str, seconds: f64) -> ModelPar
     }
 }
 
+/// `y - y_d` of a run, um.
+fn tracking_error(run: &TrackingRun, desired_um: &[f64]) -> Vec<f64> {
+    run.measured_um
+        .iter()
+        .zip(desired_um)
+        .map(|(y, d)| y - d)
+        .collect()
+}
+
+/// The figures written so far, as report entries and files, with the progress they make.
+struct FigureLog<'a> {
+    entries: Vec<FigureEntry>,
+    files: Vec<PathBuf>,
+    done: u64,
+    observer: &'a mut dyn StudyObserver,
+}
+
+impl FigureLog<'_> {
+    /// Records a figure just written: its report entry (the paper's equivalent figure and a
+    /// caption), its PNG and SVG files, one step of progress.
+    fn record(&mut self, files: FigureFiles, paper_figure: String, caption: String) {
+        let name = |path: &Path| {
+            path.file_name()
+                .map(|n| n.to_string_lossy().into_owned())
+                .unwrap_or_default()
+        };
+        self.entries.push(FigureEntry {
+            png_file: name(&files.png),
+            svg_file: Some(name(&files.svg)),
+            paper_figure,
+            caption,
+        });
+        self.files.extend([files.png, files.svg]);
+        self.skip();
+    }
+
+    /// One step of progress without a figure.
+    fn skip(&mut self) {
+        self.done += 1;
+        self.observer.advance(self.done);
+    }
+}
+
 /// Draws the figures, saves the models and the summary, and writes `index.html` into `dir`.
 pub fn write_outputs(
     study: &Study,
@@ -510,37 +553,17 @@ pub fn write_outputs(
 ) -> Result<OutputFiles, OutputError> {
     std::fs::create_dir_all(dir)
         .map_err(|e| OutputError::Io(format!("cannot create {}: {e}", dir.display())))?;
-    let mut figures = Vec::new();
-    let mut entries = Vec::new();
     let start = study.evaluation_start;
     let desired_eval = &study.desired_um[start..];
     let time = &study.time_s;
-    let errors: Vec<(String, Vec<f64>)> = study
-        .pipelines
-        .iter()
-        .flat_map(|p| p.runs.iter())
-        .chain(std::iter::once(&study.uncompensated))
-        .map(|run| {
-            let e = run
-                .measured_um
-                .iter()
-                .zip(&study.desired_um)
-                .map(|(y, d)| y - d)
-                .collect();
-            (run.label.clone(), e)
-        })
-        .collect();
-    let error_of = |label: &str| -> &[f64] {
-        errors
-            .iter()
-            .find(|(l, _)| l == label)
-            .map(|(_, e)| e.as_slice())
-            .unwrap_or(&[])
-    };
     let total = 3 + 2 * 3 + 2 * 2;
     observer.begin("figures", total);
-    let mut done = 0;
-    let mut note_store: Vec<String> = Vec::new();
+    let mut log = FigureLog {
+        entries: Vec::new(),
+        files: Vec::new(),
+        done: 0,
+        observer: &mut *observer,
+    };
     let bins = study.options.mhe_bins;
 
     // Identification record (no equivalent in the paper).
@@ -553,19 +576,16 @@ pub fn write_outputs(
         .with_axis_labels("command voltage (V)", LABEL_ACTUAL_POSITION)
         .with_series("measured", &rec.command_v, &rec.measured_um);
         let files = figures::write_panel_figure(dir, "fig00_identification", &panel)?;
-        entries.push(FigureEntry {
-            png_file: "fig00_identification.png".into(),
-            svg_file: Some("fig00_identification.svg".into()),
-            paper_figure: "(none; section 4.2)".into(),
-            caption: "The identification experiment: nested reversals and a multisine from rest, \
+        log.record(
+            files,
+            "(none; section 4.2)".into(),
+            "The identification experiment: nested reversals and a multisine from rest, \
                       measured position against command voltage."
                 .into(),
-        });
-        figures.extend([files.png, files.svg]);
-        done += 1;
-        observer.advance(done);
+        );
     }
     // Convergence of the particle swarm (no equivalent in the paper).
+    let mut convergence_drawn = false;
     if let (Some(paper), Some(exact)) = (study.pipeline("paper"), study.pipeline("exact")) {
         let [plant, inverse] = &paper.convergence;
         if !plant.is_empty() && !inverse.is_empty() {
@@ -590,25 +610,25 @@ pub fn write_outputs(
             .with_series("least squares, plant model", &ends, &ls_plant)
             .with_series("least squares, inverse model", &ends, &ls_inverse);
             let files = figures::write_panel_figure(dir, "fig01_pso_convergence", &panel)?;
-            entries.push(FigureEntry {
-                png_file: "fig01_pso_convergence.png".into(),
-                svg_file: Some("fig01_pso_convergence.svg".into()),
-                paper_figure: "(none; section 4.2)".into(),
-                caption: "Identification: the particle swarm's best RMS fit error after each \
-                          iteration (from the 20th), against the least-squares optimum for the same thresholds."
+            log.record(
+                files,
+                "(none; section 4.2)".into(),
+                "Identification: the particle swarm's best RMS fit error after each iteration \
+                 (from the 20th), against the least-squares optimum for the same thresholds."
                     .into(),
-            });
-            figures.extend([files.png, files.svg]);
+            );
+            convergence_drawn = true;
         }
     }
-    done += 1;
-    observer.advance(done);
+    if !convergence_drawn {
+        log.skip();
+    }
     // Fig. 7.
     {
-        note_store.push(format!(
+        let note = format!(
             "e_mhe = {:.2} % ({} bins)",
             study.uncompensated.indices.e_mhe_percent, bins
-        ));
+        );
         let panel = Panel::map("Without compensation (linear feedforward gain)", true)
             .with_axis_labels(LABEL_DESIRED_POSITION, LABEL_ACTUAL_POSITION)
             .with_series(
@@ -616,24 +636,21 @@ pub fn write_outputs(
                 desired_eval,
                 &study.uncompensated.measured_um[start..],
             )
-            .with_note(note_store.last().expect("pushed"));
+            .with_note(&note);
         let files = figures::write_panel_figure(dir, "fig07_uncompensated", &panel)?;
-        entries.push(FigureEntry {
-            png_file: "fig07_uncompensated.png".into(),
-            svg_file: Some("fig07_uncompensated.svg".into()),
-            paper_figure: "Fig. 7".into(),
-            caption: "Hysteresis of the stage: actual against desired position with the linear \
+        log.record(
+            files,
+            "Fig. 7".into(),
+            "Hysteresis of the stage: actual against desired position with the linear \
                       feedforward gain, last full period."
                 .into(),
-        });
-        figures.extend([files.png, files.svg]);
-        done += 1;
-        observer.advance(done);
+        );
     }
     // Figs. 8-10, per pipeline.
     let paper_numbers = ["8", "9", "10"];
     for pipeline in study.pipelines.iter().rev() {
         for (k, run) in pipeline.runs.iter().enumerate() {
+            let error_um = tracking_error(run, &study.desired_um);
             let family = ["IHC", "WIHC", "DIHC"][k];
             let title = format!("{} pipeline, {} ({})", pipeline.name, family, run.label);
             let notes = [
@@ -652,7 +669,7 @@ pub fn write_outputs(
                 .with_series("measured y", time, &run.measured_um);
             let error =
                 Panel::time_series("(c) tracking error, last full period", LABEL_TRACKING_ERROR)
-                    .with_series("y - y_d", &time[start..], &error_of(&run.label)[start..])
+                    .with_series("y - y_d", &time[start..], &error_um[start..])
                     .with_note(&notes[1]);
             let stem = format!(
                 "fig{:02}_{}_{}",
@@ -662,20 +679,16 @@ pub fn write_outputs(
             );
             let files =
                 figures::write_approach_figure(dir, &stem, &title, &map, &response, &error)?;
-            entries.push(FigureEntry {
-                png_file: format!("{stem}.png"),
-                svg_file: Some(format!("{stem}.svg")),
-                paper_figure: format!("Fig. {} (a)-(c)", paper_numbers[k]),
-                caption: format!(
+            log.record(
+                files,
+                format!("Fig. {} (a)-(c)", paper_numbers[k]),
+                format!(
                     "{family} in the {} pipeline: (a) actual against desired position and (c) \
                      the tracking error over the last full period (where the indices are \
                      taken), (b) the response over the whole run, from rest.",
                     pipeline.name
                 ),
-            });
-            figures.extend([files.png, files.svg]);
-            done += 1;
-            observer.advance(done);
+            );
         }
     }
     // Figs. 11 and 12, per pipeline.
@@ -689,24 +702,25 @@ pub fn write_outputs(
             "Tracking errors of the three approaches",
             LABEL_TRACKING_ERROR,
         );
-        for (label, run) in labels.iter().zip(&pipeline.runs) {
-            panel = panel.with_series(label, &time[start..], &error_of(&run.label)[start..]);
+        let errors_um: Vec<Vec<f64>> = pipeline
+            .runs
+            .iter()
+            .map(|run| tracking_error(run, &study.desired_um))
+            .collect();
+        for (label, error_um) in labels.iter().zip(&errors_um) {
+            panel = panel.with_series(label, &time[start..], &error_um[start..]);
         }
         let stem = format!("fig11_{}_errors", pipeline.name);
         let files = figures::write_panel_figure(dir, &stem, &panel)?;
-        entries.push(FigureEntry {
-            png_file: format!("{stem}.png"),
-            svg_file: Some(format!("{stem}.svg")),
-            paper_figure: "Fig. 11".into(),
-            caption: format!(
+        log.record(
+            files,
+            "Fig. 11".into(),
+            format!(
                 "Comparison of the tracking errors of IHC, WIHC and DIHC in the {} pipeline, \
                  last full period.",
                 pipeline.name
             ),
-        });
-        figures.extend([files.png, files.svg]);
-        done += 1;
-        observer.advance(done);
+        );
 
         let labels: Vec<String> = ["IHC", "WIHC", "DIHC"]
             .iter()
@@ -720,20 +734,21 @@ pub fn write_outputs(
         }
         let stem = format!("fig12_{}_hysteresis", pipeline.name);
         let files = figures::write_panel_figure(dir, &stem, &panel)?;
-        entries.push(FigureEntry {
-            png_file: format!("{stem}.png"),
-            svg_file: Some(format!("{stem}.svg")),
-            paper_figure: "Fig. 12".into(),
-            caption: format!(
+        log.record(
+            files,
+            "Fig. 12".into(),
+            format!(
                 "Comparison of the resulting hysteresis (actual against desired position, last \
                  full period) in the {} pipeline.",
                 pipeline.name
             ),
-        });
-        figures.extend([files.png, files.svg]);
-        done += 1;
-        observer.advance(done);
+        );
     }
+    let FigureLog {
+        entries,
+        files: figures,
+        ..
+    } = log;
     observer.end();
 
     // Models.
