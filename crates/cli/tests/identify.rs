@@ -72,7 +72,7 @@ fn identifies_a_csv_with_a_header_by_column_names() {
     let out = hystcomp(&[
         "identify",
         "--data",
-        data.to_str().unwrap(),
+        s(&data),
         "--voltage-column",
         "voltage_V",
         "--displacement-column",
@@ -80,7 +80,7 @@ fn identifies_a_csv_with_a_header_by_column_names() {
         "--time-column",
         "time_s",
         "-o",
-        model_path.to_str().unwrap(),
+        s(&model_path),
     ]);
     assert!(out.status.success(), "{}", stderr(&out));
     assert!(stdout(&out).contains("fit:"), "{}", stdout(&out));
@@ -119,7 +119,7 @@ fn json_output_is_one_document_with_the_report() {
         "--json",
         "identify",
         "--data",
-        data.to_str().unwrap(),
+        s(&data),
         "--voltage-column",
         "1",
         "--displacement-column",
@@ -129,7 +129,7 @@ fn json_output_is_one_document_with_the_report() {
         "--holdout",
         "0.25",
         "-o",
-        model_path.to_str().unwrap(),
+        s(&model_path),
     ]);
     assert!(out.status.success(), "{}", stderr(&out));
     let doc: Value = serde_json::from_str(&stdout(&out)).expect("stdout is one JSON document");
@@ -165,7 +165,7 @@ fn whitespace_files_row_ranges_and_warmup_seconds() {
         "--json",
         "identify",
         "--data",
-        data.to_str().unwrap(),
+        s(&data),
         "--voltage-column",
         "u",
         "--displacement-column",
@@ -181,7 +181,7 @@ fn whitespace_files_row_ranges_and_warmup_seconds() {
         "-n",
         "6",
         "-o",
-        model_path.to_str().unwrap(),
+        s(&model_path),
     ]);
     assert!(out.status.success(), "{}", stderr(&out));
     let doc: Value = serde_json::from_str(&stdout(&out)).unwrap();
@@ -212,7 +212,7 @@ fn reads_a_matlab_level5_file_and_explains_v73() {
         "--holdout",
         "0",
         "-o",
-        model_path.to_str().unwrap(),
+        s(&model_path),
     ]);
     assert!(out.status.success(), "{}", stderr(&out));
     assert!(ModelFile::load(&model_path).is_ok());
@@ -233,7 +233,7 @@ fn reads_a_matlab_level5_file_and_explains_v73() {
         "--displacement-column",
         "y",
         "-o",
-        model_path.to_str().unwrap(),
+        s(&model_path),
     ]);
     assert_eq!(out.status.code(), Some(1));
     assert!(stderr(&out).contains("-v7"), "{}", stderr(&out));
@@ -248,7 +248,7 @@ fn the_swarm_is_reproducible_from_the_command_line() {
         let out = hystcomp(&[
             "identify",
             "--data",
-            data.to_str().unwrap(),
+            s(&data),
             "--voltage-column",
             "2",
             "--displacement-column",
@@ -260,7 +260,7 @@ fn the_swarm_is_reproducible_from_the_command_line() {
             "--iterations",
             "60",
             "-o",
-            path.to_str().unwrap(),
+            s(&path),
         ]);
         assert!(out.status.success(), "{}", stderr(&out));
         ModelFile::load(&path).unwrap()
@@ -282,13 +282,13 @@ fn refused(contents: &str, extra: &[&str]) -> Output {
     let mut args = vec![
         "identify",
         "--data",
-        data.to_str().unwrap(),
+        s(&data),
         "--voltage-column",
         "v",
         "--displacement-column",
         "y",
         "-o",
-        model_path.to_str().unwrap(),
+        s(&model_path),
     ];
     args.extend_from_slice(extra);
     let out = hystcomp(&args);
@@ -424,13 +424,13 @@ fn an_unwritable_model_path_is_an_output_error() {
     let out = hystcomp(&[
         "identify",
         "--data",
-        data.to_str().unwrap(),
+        s(&data),
         "--voltage-column",
         "2",
         "--displacement-column",
         "3",
         "-o",
-        model_path.to_str().unwrap(),
+        s(&model_path),
     ]);
     assert_eq!(out.status.code(), Some(3), "{}", stderr(&out));
     assert!(stderr(&out).contains("m.json"));

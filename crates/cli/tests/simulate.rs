@@ -42,9 +42,9 @@ fn good_run_writes_every_column_and_a_json_summary() {
         "--json",
         "simulate",
         "--input",
-        input.to_str().unwrap(),
+        s(&input),
         "-o",
-        output.to_str().unwrap(),
+        s(&output),
         "--seed",
         "3",
     ]);
@@ -94,9 +94,9 @@ fn good_run_writes_every_column_and_a_json_summary() {
         let out = hystcomp(&[
             "simulate",
             "--input",
-            input.to_str().unwrap(),
+            s(&input),
             "-o",
-            path.to_str().unwrap(),
+            s(&path),
             "--seed",
             seed,
         ]);
@@ -139,15 +139,15 @@ fn stage_file_and_named_columns_are_used() {
         "--json",
         "simulate",
         "--stage",
-        stage.to_str().unwrap(),
+        s(&stage),
         "--input",
-        input.to_str().unwrap(),
+        s(&input),
         "--time-column",
         "time",
         "--voltage-column",
         "1",
         "-o",
-        output.to_str().unwrap(),
+        s(&output),
     ]);
     assert!(out.status.success(), "{}", stderr(&out));
     let summary: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
@@ -180,11 +180,11 @@ fn bad_stage_file_is_refused_with_the_field_named() {
             &[
                 "simulate",
                 "--stage",
-                stage.to_str().unwrap(),
+                s(&stage),
                 "--input",
-                input.to_str().unwrap(),
+                s(&input),
                 "-o",
-                output.to_str().unwrap(),
+                s(&output),
             ],
             fragments,
         );
@@ -198,13 +198,7 @@ fn missing_input_is_refused_with_its_path() {
     let input = dir.path().join("nowhere.csv");
     let output = dir.path().join("out.csv");
     assert_fails(
-        &[
-            "simulate",
-            "--input",
-            input.to_str().unwrap(),
-            "-o",
-            output.to_str().unwrap(),
-        ],
+        &["simulate", "--input", s(&input), "-o", s(&output)],
         &["nowhere.csv"],
     );
     assert!(!output.exists());
@@ -217,13 +211,7 @@ fn nan_in_the_input_is_refused_with_its_row() {
     let output = dir.path().join("out.csv");
     std::fs::write(&input, "time_s,volts\n0,1\n0.0001,NaN\n0.0002,1\n").unwrap();
     assert_fails(
-        &[
-            "simulate",
-            "--input",
-            input.to_str().unwrap(),
-            "-o",
-            output.to_str().unwrap(),
-        ],
+        &["simulate", "--input", s(&input), "-o", s(&output)],
         &["volts.csv", "row 2", "volts"],
     );
     assert!(!output.exists());
@@ -239,11 +227,11 @@ fn wrong_column_is_refused_with_the_column_named() {
         &[
             "simulate",
             "--input",
-            input.to_str().unwrap(),
+            s(&input),
             "--voltage-column",
             "command",
             "-o",
-            output.to_str().unwrap(),
+            s(&output),
         ],
         &["command"],
     );
@@ -251,11 +239,11 @@ fn wrong_column_is_refused_with_the_column_named() {
         &[
             "simulate",
             "--input",
-            input.to_str().unwrap(),
+            s(&input),
             "--voltage-column",
             "7",
             "-o",
-            output.to_str().unwrap(),
+            s(&output),
         ],
         &["7"],
     );
@@ -269,13 +257,7 @@ fn time_step_other_than_the_stage_period_is_refused() {
     let output = dir.path().join("out.csv");
     write_input(&input, 1_000.0, 100);
     assert_fails(
-        &[
-            "simulate",
-            "--input",
-            input.to_str().unwrap(),
-            "-o",
-            output.to_str().unwrap(),
-        ],
+        &["simulate", "--input", s(&input), "-o", s(&output)],
         &["time step", "10000 Hz", "sample_rate_hz = 1000"],
     );
     assert!(!output.exists());
