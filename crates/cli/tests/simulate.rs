@@ -96,7 +96,7 @@ fn good_run_writes_every_column_and_a_json_summary() {
             "--input",
             s(&input),
             "-o",
-            s(&path),
+            s(path),
             "--seed",
             seed,
         ]);
