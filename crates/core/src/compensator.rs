@@ -67,11 +67,21 @@ pub enum SolveMode {
 }
 
 /// What a compensator had to do besides its control law, counted since the last reset.
+///
+/// A sample whose output was clamped to a limit counts either in `saturated` (the desired
+/// position was out of reach) or in `loop_saturated` (it was reachable, but a delayed loop
+/// asked for more than the limits), never in both.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
 pub struct Diagnostics {
-    /// Samples whose desired position could not be reached within the output limits (or lay
-    /// outside the input range of a DIHC model): the output was clamped.
+    /// Samples whose desired position could not be reached within the output limits from the
+    /// plant model's current state (for DIHC: lay outside the inverse model's input range, or
+    /// needed a control beyond the limits): the output was clamped.
     pub saturated: u64,
+    /// Samples where the output was clamped to a limit although the desired position was
+    /// reachable within the limits from the plant model's current state: only the delayed
+    /// loops ([`SolveMode::Delayed`]) do this, when they lag or ring after a jump in `y_d`
+    /// (see [`crate::Wihc`]). The exact solves never do.
+    pub loop_saturated: u64,
     /// Samples whose desired position was NaN or infinite: the previous output was held.
     pub non_finite: u64,
 }
@@ -84,7 +94,9 @@ pub struct Diagnostics {
 /// never NaN, whatever it is fed. A NaN or infinite desired position holds the previous output
 /// (the initial output before any sample is 0 clamped into the limits) and is counted in
 /// [`Diagnostics::non_finite`]; a finite desired position that cannot be reached within the
-/// limits gives the nearest limit and is counted in [`Diagnostics::saturated`].
+/// limits gives the nearest limit and is counted in [`Diagnostics::saturated`]; a delayed loop
+/// that hits a limit although the desired position was reachable is counted in
+/// [`Diagnostics::loop_saturated`].
 ///
 /// `step` and `process` never allocate.
 pub trait Compensator<T: Real> {
@@ -114,7 +126,7 @@ pub trait Compensator<T: Real> {
     /// The output limits.
     fn limits(&self) -> OutputLimits<T>;
 
-    /// Counters of saturated and non-finite samples since the last reset.
+    /// Counters of saturated, loop-saturated and non-finite samples since the last reset.
     fn diagnostics(&self) -> Diagnostics;
 }
 
@@ -156,10 +168,27 @@ impl<T: Real> OutputGuard<T> {
     /// saturation), records and returns it.
     #[inline]
     pub fn emit(&mut self, value: T, saturated: bool) -> T {
+        self.emit_classified(value, saturated, || false)
+    }
+
+    /// As [`OutputGuard::emit`], but a clamped sample is counted as a loop saturation when
+    /// `reachable()` says the desired position could have been reached within the limits
+    /// (asked only for clamped samples: it may cost an exact solve).
+    #[inline]
+    pub fn emit_classified(
+        &mut self,
+        value: T,
+        limited: bool,
+        reachable: impl FnOnce() -> bool,
+    ) -> T {
         let out = self.limits.clamp_or(value, self.previous);
         let rounding = T::epsilon() * T::from_f64(64.0) * value.abs().max(T::one());
-        if saturated || value.is_nan() || (out - value).abs() > rounding {
-            self.diagnostics.saturated += 1;
+        if limited || value.is_nan() || (out - value).abs() > rounding {
+            if reachable() {
+                self.diagnostics.loop_saturated += 1;
+            } else {
+                self.diagnostics.saturated += 1;
+            }
         }
         self.previous = out;
         out

@@ -142,12 +142,13 @@ impl fmt::Display for CoreError {
                 range,
             } => write!(
                 f,
-                "the model is not invertible on the input range [{}, {}]: with the first \
-                 {active_operators} play operator(s) moving, the branch slope \
-                 a2 + 3 a1 x^2 + b_1 + ... + b_{active_operators} is {slope:.6} at normalised input \
-                 x = {input:.6} (it must stay > 0); identify the model with invertibility \
-                 constraints or narrow the range",
-                range.0, range.1
+                "the model is not invertible on the input range [{}, {}]: {}, the branch slope \
+                 a2 + 3 a1 x^2{} is {slope:.6} at normalised input x = {input:.6} (it must stay \
+                 > 0); identify the model with invertibility constraints or narrow the range",
+                range.0,
+                range.1,
+                Moving(*active_operators),
+                WeightSum(*active_operators),
             ),
             CoreError::PiPartNotInvertible {
                 active_operators,
@@ -155,8 +156,9 @@ impl fmt::Display for CoreError {
             } => write!(
                 f,
                 "the PI part a2 v + sum b_i F_ri[v] has no inverse (eq. (7)): \
-                 a2 + b_1 + ... + b_{active_operators} = {slope:.6} is not > 0; \
-                 IHC cannot be built from this model (WIHC may still work)"
+                 a2{} = {slope:.6} is not > 0; \
+                 IHC cannot be built from this model (WIHC may still work)",
+                WeightSum(*active_operators),
             ),
             CoreError::DelayedWihcUnstable { ratio, input } => write!(
                 f,
@@ -172,3 +174,32 @@ impl fmt::Display for CoreError {
 
 #[cfg(feature = "std")]
 impl std::error::Error for CoreError {}
+
+/// ` + b_1 + ... + b_k` written for people: nothing for `k = 0`, ` + b_1`, ` + b_1 + b_2`,
+/// then the ellipsis.
+struct WeightSum(usize);
+
+impl fmt::Display for WeightSum {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self.0 {
+            0 => Ok(()),
+            1 => f.write_str(" + b_1"),
+            2 => f.write_str(" + b_1 + b_2"),
+            k => write!(f, " + b_1 + ... + b_{k}"),
+        }
+    }
+}
+
+/// "with no play operator moving", "with the first play operator moving", "with the first k
+/// play operators moving".
+struct Moving(usize);
+
+impl fmt::Display for Moving {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self.0 {
+            0 => f.write_str("with no play operator moving"),
+            1 => f.write_str("with the first play operator moving"),
+            k => write!(f, "with the first {k} play operators moving"),
+        }
+    }
+}

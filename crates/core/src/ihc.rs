@@ -79,6 +79,14 @@ impl<T: Real> SegmentEquation<T> for Eq5Exact<T> {
         w + self.a1 * v * v * v - self.desired
     }
     #[inline(always)]
+    fn rounding(&self, w: T, alpha: T, beta: T) -> T {
+        let v = alpha * w + beta;
+        let terms = w.abs() + (self.a1 * v * v * v).abs() + self.desired.abs();
+        // Absolute as well as relative: the desired position itself carries the rounding of
+        // the plant model that produced it (sums of b_i w_i).
+        T::epsilon() * T::from_f64(256.0) * (T::one() + terms)
+    }
+    #[inline(always)]
     fn root(&self, lo: T, hi: T, f_lo: T, f_hi: T, alpha: T, beta: T, inv_alpha: T) -> T {
         let v = increasing_cubic_root(
             self.a1,
@@ -148,25 +156,36 @@ impl<T: Real, B: Buffer<T>> Compensator<T> for Ihc<T, B> {
         let v_prev = self.guard.previous;
         let w_prev = self.inverse.input();
         let cubic_prev = self.a1 * v_prev * v_prev * v_prev;
-        let solution = match self.mode {
+        let exact = Eq5Exact {
+            a1: self.a1,
+            desired,
+        };
+        // Residual of the exact eq. (5) at the previous sample: w_prev + a1 v_prev^3 - y_d.
+        let f_exact = w_prev + cubic_prev - desired;
+        match self.mode {
             SolveMode::Exact => {
-                let equation = Eq5Exact {
-                    a1: self.a1,
-                    desired,
-                };
-                // Residual at the previous sample: w_prev + a1 v_prev^3 - y_d.
-                self.inverse
-                    .solve(&equation, w_prev + cubic_prev - desired, self.guard.limits)
+                let solution = self.inverse.solve(&exact, f_exact, self.guard.limits);
+                let v = self.inverse.feed_solved(&solution);
+                self.guard.emit(v, solution.saturated)
             }
             SolveMode::Delayed => {
                 // Eq. (5) with the loop broken: w(t) = y_d(t) - a1 v^3(t - Ts).
                 let w = desired - cubic_prev;
-                let equation = Eq5Delayed { w };
-                self.inverse.solve(&equation, w_prev - w, self.guard.limits)
+                let solution = self
+                    .inverse
+                    .solve(&Eq5Delayed { w }, w_prev - w, self.guard.limits);
+                // A clamped sample: was y_d reachable within the limits? The exact solve from
+                // the same state says; it only runs when the delayed loop hit a limit.
+                let reachable = solution.saturated
+                    && !self
+                        .inverse
+                        .solve(&exact, f_exact, self.guard.limits)
+                        .saturated;
+                let v = self.inverse.feed_solved(&solution);
+                self.guard
+                    .emit_classified(v, solution.saturated, || reachable)
             }
-        };
-        let v = self.inverse.feed_solved(&solution);
-        self.guard.emit(v, solution.saturated)
+        }
     }
 
     fn limits(&self) -> OutputLimits<T> {

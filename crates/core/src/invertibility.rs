@@ -100,3 +100,53 @@ pub(crate) fn min_branch_slope<T: Real>(
     });
     worst
 }
+
+/// The worst-case small-signal loop gain of the delayed WIHC (eq. (9) with `H[v](t - Ts)`) over
+/// an input range, and where it occurs. See [`crate::Mpim::delayed_wihc_loop_gain`].
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct LoopGain<T> {
+    /// `|3 a1 x^2 + b_1 + ... + b_k| / a2`: below 1 the delayed loop contracts on every branch
+    /// and settles after a jump in `y_d`; at or above 1 it can ring between the output limits.
+    pub gain: T,
+    /// The (normalised) input `x` where it occurs.
+    pub input: T,
+    /// `k`, the number of operators (the first ones by threshold) moving with the input there.
+    pub active_operators: usize,
+}
+
+/// The largest `|3 a1 x^2 + b_1 + ... + b_k| / a2` over the checkpoints of
+/// [`branch_checkpoints`] (the quantity is a function of `x^2`, so its extremes over each
+/// reachable interval lie at those points).
+pub(crate) fn max_delayed_loop_gain<T: Real>(
+    thresholds: &[T],
+    weights: &[T],
+    a1: T,
+    a2: T,
+    lo: T,
+    hi: T,
+) -> LoopGain<T> {
+    let three = T::from_f64(3.0);
+    let mut worst = LoopGain {
+        gain: T::zero(),
+        input: lo,
+        active_operators: 0,
+    };
+    let mut cached_k = 0;
+    let mut prefix = T::zero();
+    branch_checkpoints(thresholds, lo, hi, |k, x| {
+        while cached_k < k {
+            prefix = prefix + weights[cached_k];
+            cached_k += 1;
+        }
+        let gain = (three * a1 * x * x + prefix).abs() / a2;
+        // NaN (a2 = 0) must not hide: it compares false, so test it explicitly.
+        if gain > worst.gain || gain.is_nan() {
+            worst = LoopGain {
+                gain,
+                input: x,
+                active_operators: k,
+            };
+        }
+    });
+    worst
+}

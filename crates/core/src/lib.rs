@@ -63,7 +63,7 @@ pub use compensator::{Compensator, Diagnostics, OutputLimits, SolveMode};
 pub use dihc::Dihc;
 pub use error::CoreError;
 pub use ihc::Ihc;
-pub use invertibility::{BranchSlope, branch_checkpoints};
+pub use invertibility::{BranchSlope, LoopGain, branch_checkpoints};
 pub use mpim::Mpim;
 pub use play::{OneSidedPlay, SymmetricPlay};
 pub use real::Real;

@@ -36,6 +36,12 @@ pub(crate) trait SegmentEquation<T: Real> {
     }
     /// The root of the residual in `[lo, hi]`, given its values at both ends (`f_lo <= 0 <= f_hi`);
     /// `inverse_alpha` is `1 / alpha`, from a table.
+    /// How far below zero (rising) or above zero (falling) the residual at a limit may be and
+    /// still count as reached: rounding of its terms. By default 0 (strict).
+    #[inline(always)]
+    fn rounding(&self, _x: T, _alpha: T, _beta: T) -> T {
+        T::zero()
+    }
     #[allow(clippy::too_many_arguments)]
     fn root(&self, lo: T, hi: T, f_lo: T, f_hi: T, alpha: T, beta: T, inverse_alpha: T) -> T;
 }
@@ -315,7 +321,7 @@ impl<T: Real, B: Buffer<T>> PlayBank<T, B> {
             }
             let end = equation.input_at_control(v_max, segment.alpha, segment.beta);
             let f_end = equation.residual(end, segment.alpha, segment.beta);
-            if f_end < T::zero() {
+            if f_end < -equation.rounding(end, segment.alpha, segment.beta) {
                 return found(end, true, segment);
             }
             found(root(lo, end, f_lo, f_end, &segment), false, segment)
@@ -341,7 +347,7 @@ impl<T: Real, B: Buffer<T>> PlayBank<T, B> {
             }
             let end = equation.input_at_control(v_min, segment.alpha, segment.beta);
             let f_end = equation.residual(end, segment.alpha, segment.beta);
-            if f_end > T::zero() {
+            if f_end > equation.rounding(end, segment.alpha, segment.beta) {
                 return found(end, true, segment);
             }
             found(root(end, hi, f_end, f_hi, &segment), false, segment)

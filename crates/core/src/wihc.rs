@@ -3,21 +3,34 @@
 use crate::compensator::OutputGuard;
 use crate::solve::increasing_cubic_root;
 use crate::walk::{PlayBank, SegmentEquation};
-use crate::{Buffer, Compensator, CoreError, Diagnostics, Mpim, OutputLimits, Real, SolveMode};
+use crate::{
+    Buffer, Compensator, CoreError, Diagnostics, LoopGain, Mpim, OutputLimits, Real, SolveMode,
+};
 
 /// WIHC, section 3.2: the identified plant MPIM used directly in a multiplicative structure,
 /// `v(t) = (y_d(t) - H[v](t)) / a2` with `H[v](t) = a1 v^3(t) + sum b_i F_{r_i}[v](t)`, eq. (9).
 ///
 /// - [`SolveMode::Exact`]: eq. (9) is implicit (`H[v](t)` depends on `v(t)`); it is solved
 ///   exactly each sample, so that the plant model gives `P[v](t) = y_d(t)`.
-/// - [`SolveMode::Delayed`]: `H[v](t - Ts)` replaces `H[v](t)`, as real-time implementations do.
-///   This is an iteration `v(t) = (y_d(t) - H[v](t - Ts)) / a2` whose small-signal loop gain is
-///   `(3 a1 x^2 + sum of the moving b_i) / a2`. Around a reversal only the zero-threshold
-///   operators move, and the constructor checks that this gain stays below 1 over the range;
-///   while the input moves on, more operators move and the gain can exceed 1 (Table 1:
-///   `(b_1 + b_2) / a2 = 1.17`), so after a jump in `y_d` the output rings until the motion
-///   reverses. On smooth trajectories sampled fast (the study: 10 kHz, 1 Hz) it stays within a
-///   fraction of a sample's step of the exact solution; prefer [`SolveMode::Exact`].
+/// - [`SolveMode::Delayed`]: `H[v](t - Ts)` replaces `H[v](t)`, as real-time implementations
+///   do (the paper's algorithm). This is a fixed-point iteration
+///   `v(t) = (y_d(t) - H[v](t - Ts)) / a2` whose small-signal loop gain on a branch with the
+///   first `k` operators moving is `|3 a1 x^2 + b_1 + ... + b_k| / a2`.
+///   - Around a reversal only the zero-threshold operators move; the constructor refuses a
+///     model whose gain there reaches 1 ([`CoreError::DelayedWihcUnstable`]).
+///   - After a jump in `y_d` the loop swings over a wide range and more operators move. Its
+///     worst case over the limits is [`Wihc::delayed_loop_gain`]. Below 1 the loop settles
+///     within a few tens of samples (the error shrinks at least by that factor each sample)
+///     and then follows the exact solution to within a fraction of a sample's step, a gap
+///     that shrinks with the sampling rate. At or above 1 (Table 1 of the paper: 1.66, all
+///     ten operators moving near `x = 0`) it can ring between the output limits until the
+///     motion reverses: from rest, `y_d = 35 + 20 sin(2 pi t)` um alternates 0 V / 10 V for
+///     about 50 samples. Those clamped samples count in [`Diagnostics::loop_saturated`], not
+///     in [`Diagnostics::saturated`]: the desired position was reachable.
+///
+///   On smooth trajectories sampled fast, started from a consistent state (the study:
+///   10 kHz, 1 Hz, from rest at the trajectory's start) it stays within a fraction of a
+///   sample's step of the exact solution. Prefer [`SolveMode::Exact`].
 ///
 /// See [`Compensator`] for the output guarantees.
 #[derive(Debug, Clone)]
@@ -29,6 +42,8 @@ pub struct Wihc<T: Real, B: Buffer<T>> {
     inverse_a2: T,
     mode: SolveMode,
     guard: OutputGuard<T>,
+    /// The worst-case loop gain of the delayed iteration over the limits.
+    loop_gain: LoopGain<T>,
 }
 
 impl<T: Real, B: Buffer<T>> Wihc<T, B> {
@@ -49,12 +64,14 @@ impl<T: Real, B: Buffer<T>> Wihc<T, B> {
         if mode == SolveMode::Delayed {
             check_delayed_contraction(plant, limits)?;
         }
+        let loop_gain = plant.delayed_wihc_loop_gain(limits.min(), limits.max())?;
         let mut wihc = Wihc {
             bank: PlayBank::new(a2, plant.thresholds(), plant.weights())?,
             a1,
             inverse_a2: T::one() / a2,
             mode,
             guard: OutputGuard::new(limits),
+            loop_gain,
         };
         wihc.reset();
         Ok(wihc)
@@ -63,6 +80,15 @@ impl<T: Real, B: Buffer<T>> Wihc<T, B> {
     /// The solve mode.
     pub fn mode(&self) -> SolveMode {
         self.mode
+    }
+
+    /// The worst-case small-signal loop gain of the delayed iteration, over every branch
+    /// reachable within the output limits: `max |3 a1 x^2 + b_1 + ... + b_k| / a2` (see
+    /// [`Mpim::delayed_wihc_loop_gain`]). Reported whatever the mode, so that a caller can
+    /// choose: below 1 the delayed loop settles after any jump in `y_d`; at or above 1 prefer
+    /// [`SolveMode::Exact`]. Table 1 of the paper on `[0, 1]`: 1.66.
+    pub fn delayed_loop_gain(&self) -> LoopGain<T> {
+        self.loop_gain
     }
 
     /// The plant model's operators' memory as the compensator tracks it (the memory of
@@ -123,6 +149,14 @@ impl<T: Real> SegmentEquation<T> for Eq9<T> {
         v
     }
     #[inline(always)]
+    fn rounding(&self, x: T, alpha: T, beta: T) -> T {
+        let terms =
+            (self.a1 * x * x * x).abs() + (alpha * x).abs() + beta.abs() + self.desired.abs();
+        // Absolute as well as relative: the desired position itself carries the rounding of
+        // the plant model that produced it (sums of b_i w_i).
+        T::epsilon() * T::from_f64(256.0) * (T::one() + terms)
+    }
+    #[inline(always)]
     fn root(&self, lo: T, hi: T, f_lo: T, f_hi: T, alpha: T, beta: T, _inv: T) -> T {
         increasing_cubic_root(self.a1, alpha, beta - self.desired, lo, hi, f_lo, f_hi)
     }
@@ -165,7 +199,19 @@ impl<T: Real, B: Buffer<T>> Compensator<T> for Wihc<T, B> {
             SolveMode::Delayed => {
                 // H[v](t - Ts) = a1 v^3(t - Ts) + sum b_i F_{r_i}[v](t - Ts).
                 let h_prev = self.a1 * v_prev * v_prev * v_prev + self.bank.memory_sum();
-                let v = self.guard.emit((desired - h_prev) * self.inverse_a2, false);
+                // A clamped sample counts as a loop saturation when the exact eq. (9) could
+                // have been met within the limits from the same state (solved only then).
+                let (a1, bank, limits) = (self.a1, &self.bank, self.guard.limits);
+                let reachable = || {
+                    let equation = Eq9 { a1, desired };
+                    let f_prev = a1 * v_prev * v_prev * v_prev + bank.output() - desired;
+                    !bank.solve(&equation, f_prev, limits).saturated
+                };
+                let v = self.guard.emit_classified(
+                    (desired - h_prev) * self.inverse_a2,
+                    false,
+                    reachable,
+                );
                 self.bank.feed(v);
                 v
             }

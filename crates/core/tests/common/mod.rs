@@ -164,3 +164,40 @@ pub fn bisection_inverse(plant: &VecMpim, desired: f64, limits: OutputLimits<f64
     }
     0.5 * (lo + hi)
 }
+
+/// A random model whose delayed WIHC loop gain `|3 a1 x^2 + b_1 + ... + b_k| / a2` is at most
+/// `gain` (< 1) for every `k` and `|x| <= sqrt(2)`: `a2 = (6 |a1| + sum |b_i|) / gain`. Such a
+/// model is also invertible there (every branch slope is at least `a2 (1 - gain)`) and so is
+/// its PI part, so every compensator can be built from it with limits inside `[-1.4, 1.4]`.
+pub fn random_model_with_gain_below(rng: &mut impl Rng, n: usize, gain: f64) -> VecMpim {
+    let m = random_model(rng, n);
+    let spread = 6.0 * m.a1().abs() + m.weights().iter().map(|b| b.abs()).sum::<f64>();
+    let a2 = spread.max(1e-3) / gain;
+    Mpim::new(m.thresholds(), m.weights(), m.a1(), a2).unwrap()
+}
+
+/// The largest `|3 a1 x^2 + b_1 + ... + b_k| / a2` over a dense grid of the (x, k) reachable from
+/// the reset state within `[min(lo, 0), max(hi, 0)]`: operator `k` moves at `x` only after the
+/// input travelled `r_k` from a reversal, so `x >= lo + r_k` or `x <= max(hi - r_k, 0)`.
+pub fn grid_delayed_loop_gain(model: &VecMpim, lo: f64, hi: f64) -> f64 {
+    let (lo, hi) = (lo.min(0.0), hi.max(0.0));
+    let (r, b) = (model.thresholds(), model.weights());
+    let always = r.iter().take_while(|r| **r <= 0.0).count();
+    let mut worst: f64 = 0.0;
+    for k in always..=r.len() {
+        let rk = if k == 0 { 0.0 } else { r[k - 1] };
+        let prefix: f64 = b[..k].iter().sum();
+        let mut xs: Vec<f64> = (0..=4000)
+            .map(|i| lo + (hi - lo) * i as f64 / 4000.0)
+            .collect();
+        xs.extend([lo, hi, lo + rk, (hi - rk).max(0.0), 0.0]);
+        for x in xs {
+            let reachable = x >= lo && x <= hi && (x >= lo + rk || x <= (hi - rk).max(0.0));
+            if reachable {
+                let g = (3.0 * model.a1() * x * x + prefix).abs() / model.a2();
+                worst = worst.max(g);
+            }
+        }
+    }
+    worst
+}
