@@ -7,11 +7,11 @@
 //! compensator would do on the device the records come from.
 
 use hystcomp_io::compensator::{Method, ScaledCompensator};
-use hystcomp_io::data::{check_finite, check_not_constant, check_same_length};
+use hystcomp_io::data::{check_finite, check_min_samples, check_not_constant, check_same_length};
 use hystcomp_io::model_file::{Direction, ModelFile};
 use serde::{Deserialize, Serialize};
 
-use crate::identification::{auto_warmup, min_max};
+use crate::identification::{auto_warmup, min_max, minimum_fit_samples};
 use crate::report::{ErrorStats, FitReport};
 use crate::{IdentifyError, IdentifyOptions, Observer, Warmup, identify_observed};
 
@@ -85,7 +85,8 @@ pub struct Validation {
     pub samples: usize,
     /// Samples at its start left out of the errors.
     pub warmup: usize,
-    /// The output limits of the compensators: the training record's voltage range (physical).
+    /// The output limits of the compensators: the voltage range the plant model was fitted on
+    /// (physical; the training record after its warm-up, without its hold-out).
     pub voltage_limits: [f64; 2],
     /// Test samples whose voltage lies outside the plant model's input range (the model
     /// extrapolates there).
@@ -112,7 +113,8 @@ pub struct CrossValidation {
 }
 
 /// Identifies a plant model and an inverse model on `train` and validates both on `test`
-/// (see [`validate_models`]). `observer` sees the solver's progress of both identifications.
+/// (see [`validate_models`]). `observer` sees the solver's progress of both identifications,
+/// each announced by [`Observer::begin`] (`plant model`, `inverse model`).
 pub fn crossval(
     train: Record<'_>,
     test: Record<'_>,
@@ -125,18 +127,21 @@ pub fn crossval(
     plant_options.direction = Direction::Plant;
     let mut inverse_options = options.identify.clone();
     inverse_options.direction = Direction::Inverse;
+    observer.begin("plant model");
     let plant = identify_observed(train.voltage, train.displacement, &plant_options, observer)?;
+    observer.begin("inverse model");
     let inverse = identify_observed(
         train.voltage,
         train.displacement,
         &inverse_options,
         observer,
     )?;
-    let (v_min, v_max) = min_max(train.voltage);
+    // The compensators' output limits: the voltage range the plant model was fitted on.
+    let limits = [plant.report.input.min, plant.report.input.max];
     let test_report = validate_models(
         &plant.model,
         &inverse.model,
-        [v_min, v_max],
+        limits,
         test,
         options.test_warmup,
     )?;
@@ -159,7 +164,9 @@ pub fn crossval(
 ///   limits `voltage_limits` (physical; the training record's voltage range).
 ///
 /// Everything starts from its reset state at the first sample; errors are taken after the
-/// warm-up.
+/// warm-up, over at least as many samples as identifying the plant model needs
+/// ([`SAMPLES_PER_PARAMETER`](crate::SAMPLES_PER_PARAMETER) per parameter, `n + 3`
+/// parameters; fewer give [`IdentifyError::Data`]).
 pub fn validate_models(
     plant: &ModelFile,
     inverse: &ModelFile,
@@ -193,6 +200,18 @@ pub fn validate_models(
             reason: format!("the test record has only {samples} samples; give a shorter warm-up"),
         });
     }
+    let parameters = plant.thresholds.len() + 3;
+    let needed = minimum_fit_samples(parameters);
+    check_min_samples(
+        needed,
+        samples - start,
+        &format!(
+            "a validation on the test record (as many as identifying a model with {} play \
+             operator(s) needs; after a test warm-up of {start} of its {samples} samples: give \
+             more rows or a shorter --test-warmup)",
+            plant.thresholds.len()
+        ),
+    )?;
     let span = start..samples;
     let voltage_range = range_of(&test.voltage[span.clone()]);
     let displacement_range = range_of(&test.displacement[span.clone()]);

@@ -46,6 +46,26 @@ pub enum IdentifyError {
         /// The total constraint violation of the best particle (normalised slope units).
         violation: f64,
     },
+    /// The displacement does not rise with the voltage over the fitted samples: their Pearson
+    /// correlation is below [`MIN_CORRELATION`](crate::MIN_CORRELATION) (a wrong column, a
+    /// wrong sign, a column of noise).
+    NotRising {
+        /// The correlation found (NaN when a signal is constant over the fitted samples).
+        correlation: f64,
+        /// The smallest accepted.
+        minimum: f64,
+    },
+    /// The displacement is the voltage, or an exact linear function of it (correlation 1): the
+    /// same column given twice.
+    SameSignal,
+    /// The fit's RMS error exceeds the limit of
+    /// [`IdentifyOptions::max_fit_rms_percent`](crate::IdentifyOptions::max_fit_rms_percent).
+    PoorFit {
+        /// The RMS error, % of the fitted output range.
+        rms_percent: f64,
+        /// The limit.
+        limit: f64,
+    },
     /// The identified parameters were refused by the core (should not happen: every
     /// constraint the core checks is part of the fitting problem).
     Core(CoreError),
@@ -65,10 +85,11 @@ impl fmt::Display for IdentifyError {
             IdentifyError::IllConditioned { condition, limit } => write!(
                 f,
                 "the data do not determine every model parameter: the column-scaled regressor \
-                 matrix has condition number {condition:.3e} (limit {limit:.0e}). The input \
+                 matrix has condition number {condition:.3e} (limit {}). The input \
                  probably does not sweep its range back and forth often enough to tell the play \
                  operators apart: use fewer operators (-n), fewer or more spread thresholds, a \
-                 shorter warm-up or hold-out, or a record with full-range cycles"
+                 shorter warm-up or hold-out, or a record with full-range cycles",
+                number(*limit)
             ),
             IdentifyError::Infeasible { reason } => write!(
                 f,
@@ -86,9 +107,43 @@ impl fmt::Display for IdentifyError {
                  (best total violation {violation:.3e}); use more iterations or particles, a \
                  larger penalty, --polish, or --method ls"
             ),
+            IdentifyError::NotRising {
+                correlation,
+                minimum,
+            } => write!(
+                f,
+                "the displacement does not rise with the voltage: their correlation over the \
+                 fitted samples is {correlation:.3} (at least {minimum} is needed; a piezo \
+                 record has about 0.95 or more). Check the columns (--voltage-column, \
+                 --displacement-column), the sign (a sensor that reads lower as the stage \
+                 extends needs a negative --displacement-factor) and the factors"
+            ),
+            IdentifyError::SameSignal => write!(
+                f,
+                "the displacement is an exact linear function of the voltage (correlation 1), \
+                 which no piezo record is: the same column was probably given for both; check \
+                 --voltage-column and --displacement-column"
+            ),
+            IdentifyError::PoorFit { rms_percent, limit } => write!(
+                f,
+                "the best model leaves an RMS error of {rms_percent:.1} % of the output range, \
+                 more than the {limit} % a usable hysteresis model leaves (an MPIM fits a piezo \
+                 record to about 1 %). Check the columns, the factors and the output offset \
+                 (--offset fit is right for a sensor with an arbitrary zero); pass \
+                 --accept-poor-fit to write the model anyway"
+            ),
             IdentifyError::Core(e) => write!(f, "the identified model is refused: {e}"),
             IdentifyError::ModelFile(e) => e.fmt(f),
         }
+    }
+}
+
+/// A number as people write it: `1e10`, `1.5`, `2500`.
+fn number(x: f64) -> String {
+    if x != 0.0 && !(1e-3..1e5).contains(&x.abs()) {
+        format!("{x:e}")
+    } else {
+        x.to_string()
     }
 }
 

@@ -7,7 +7,7 @@ use hystcomp_io::data::{check_finite, check_min_samples, check_not_constant, che
 use hystcomp_io::model_file::{Direction, ModelFile, Scale};
 use serde::{Deserialize, Serialize};
 
-use crate::options::{AUTO_WARMUP_LEVEL, SAMPLES_PER_PARAMETER};
+use crate::options::{AUTO_WARMUP_LEVEL, MIN_CORRELATION, SAMPLES_PER_PARAMETER};
 use crate::report::{ErrorStats, FitReport, SampleCounts, SignalRange};
 use crate::{
     FitProblem, IdentifyError, IdentifyOptions, LeastSquares, Method, NoObserver, Observer,
@@ -41,17 +41,28 @@ pub fn identify(
 ///
 /// 1. The model input and output are chosen by [`IdentifyOptions::direction`]: voltage to
 ///    displacement for a plant model, displacement to voltage for an inverse (DIHC) model.
-/// 2. Normalisation: `x = (input - min) / (max - min)` over the record, so that the thresholds
-///    `(i - 1)/n` are fractions of the input range (eq. (11)); output
-///    `(output - offset) / (max - min)` with the offset of [`OutputOffset`].
-/// 3. The operators run over the whole record from zero memory (eq. (1)); the warm-up and the
-///    hold-out are excluded from the fit.
+/// 2. The warm-up ([`Warmup`]) and the hold-out are excluded from the fit; the fitted samples
+///    must have a displacement that rises with the voltage (Pearson correlation at least
+///    [`MIN_CORRELATION`](crate::MIN_CORRELATION), and not exactly 1, which only the same
+///    column given twice produces).
+/// 3. Normalisation: `x = (input - min) / (max - min)` with min and max over the **fitted
+///    samples** (neither the warm-up, whose transient the model is not fitted to, nor the
+///    hold-out, which must not inform the model), so that the thresholds `(i - 1)/n` are
+///    fractions of the fitted input range (eq. (11)) and every "% of the output range" refers
+///    to the fitted output range `(output - offset) / (max - min)`, with the offset of
+///    [`OutputOffset`]. The operators still run over the whole record from zero memory
+///    (eq. (1)), warm-up included; warm-up and hold-out samples may fall outside `[0, 1]`.
 /// 4. The chosen solver minimises the RMS error under the invertibility constraints of
 ///    [`FitProblem`]; the model is then checked by the core (`check_invertible` on `[0, 1]`,
 ///    and for a plant model the IHC of eq. (7) and the delayed WIHC of eq. (9) are built).
 ///
+/// 5. The fit's RMS error must not exceed
+///    [`IdentifyOptions::max_fit_rms_percent`] ([`IdentifyError::PoorFit`]).
+///
 /// Refuses samples that are NaN or infinite, of different lengths, constant, or too few for
-/// the model ([`IdentifyError::Data`], with the number needed), and invalid options.
+/// the model ([`IdentifyError::Data`], with the number needed), a displacement that does not
+/// rise with the voltage ([`IdentifyError::NotRising`], [`IdentifyError::SameSignal`]), and
+/// invalid options.
 pub fn identify_observed(
     voltage: &[f64],
     displacement: &[f64],
@@ -85,22 +96,11 @@ pub fn identify_observed(
                 &options.voltage_unit,
             ),
         };
-    let (x_min, x_max) = min_max(input);
-    let (y_min, y_max) = min_max(output);
-    let x_scale = x_max - x_min;
-    let y_scale = y_max - y_min;
-    let y_reference = match options.offset {
-        OutputOffset::Fit | OutputOffset::None => y_min,
-        OutputOffset::Value(v) => v,
-    };
-    let x: Vec<f64> = input.iter().map(|v| (v - x_min) / x_scale).collect();
-    let y: Vec<f64> = output.iter().map(|v| (v - y_reference) / y_scale).collect();
-
     let thresholds = options.thresholds.values()?;
     let fit_offset = options.offset == OutputOffset::Fit;
     let parameters_count =
         thresholds.len() + 2 - usize::from(thresholds[0] == 0.0) + usize::from(fit_offset);
-    let total = x.len();
+    let total = input.len();
     let warmup = match options.warmup {
         Warmup::Auto => auto_warmup(voltage),
         Warmup::Samples(n) => n.min(total),
@@ -108,7 +108,7 @@ pub fn identify_observed(
     let after_warmup = total - warmup;
     let holdout = (options.holdout * after_warmup as f64).floor() as usize;
     let fit_samples = after_warmup - holdout;
-    let needed = (SAMPLES_PER_PARAMETER * parameters_count).max(parameters_count + 1);
+    let needed = minimum_fit_samples(parameters_count);
     check_min_samples(
         needed,
         fit_samples,
@@ -120,6 +120,33 @@ pub fn identify_observed(
         ),
     )?;
     let fit = warmup..warmup + fit_samples;
+    check_rises(&voltage[fit.clone()], &displacement[fit.clone()])?;
+
+    // Normalisation over the fitted samples only: the warm-up is a transient the model is not
+    // fitted to, and the hold-out must not inform the model (its samples may fall outside
+    // [0, 1], where the model extrapolates).
+    let (x_min, x_max) = min_max(&input[fit.clone()]);
+    let (y_min, y_max) = min_max(&output[fit.clone()]);
+    let x_scale = x_max - x_min;
+    let y_scale = y_max - y_min;
+    for (quantity, scale) in [(input_quantity, x_scale), (output_quantity, y_scale)] {
+        if !(scale.is_finite() && scale > 0.0) {
+            return Err(IdentifyError::InvalidOption {
+                option: "fitting span",
+                value: format!("samples {}..{} of {total}", fit.start + 1, fit.end),
+                reason: format!(
+                    "the {quantity} is constant (or overflows) over the fitted samples; \
+                     give a shorter warm-up or hold-out, or check the column and its factor"
+                ),
+            });
+        }
+    }
+    let y_reference = match options.offset {
+        OutputOffset::Fit | OutputOffset::None => y_min,
+        OutputOffset::Value(v) => v,
+    };
+    let x: Vec<f64> = input.iter().map(|v| (v - x_min) / x_scale).collect();
+    let y: Vec<f64> = output.iter().map(|v| (v - y_reference) / y_scale).collect();
 
     let problem = FitProblem::new(
         ProblemData {
@@ -179,6 +206,14 @@ pub fn identify_observed(
     let fit_stats = ErrorStats::new(&predicted[fit.clone()], &output[fit.clone()], y_scale)
         .expect("the fitting span is not empty");
     let holdout_stats = ErrorStats::new(&predicted[fit.end..], &output[fit.end..], y_scale);
+    if let Some(limit) = options.max_fit_rms_percent {
+        if fit_stats.rms_percent.is_nan() || fit_stats.rms_percent > limit {
+            return Err(IdentifyError::PoorFit {
+                rms_percent: fit_stats.rms_percent,
+                limit,
+            });
+        }
+    }
 
     let input_scale = Scale {
         quantity: input_quantity.to_owned(),
@@ -221,7 +256,7 @@ pub fn identify_observed(
         holdout: holdout_stats,
         condition_number: problem.condition_number(),
         constraints: problem.constraints().len(),
-        active_constraints: solution.active_constraints,
+        active_constraints: problem.active_count(&solution.theta, ACTIVE_TOLERANCE),
         margin: options.margin,
         min_branch_slope: slope.slope,
         pso: match &options.method {
@@ -253,6 +288,54 @@ pub fn identify_observed(
         report,
         parameters,
     })
+}
+
+/// A constraint counts as active in the report when its slack is at most this (normalised
+/// slope units, where the data's mean slope is 1): far below the default margin (1e-3), far
+/// above the rounding of the exact active-set solve, and above the interior-point solver's
+/// distance from the boundary when its answer is kept.
+const ACTIVE_TOLERANCE: f64 = 1e-6;
+
+/// The fewest fitting samples a model with `parameters` parameters needs:
+/// [`SAMPLES_PER_PARAMETER`] per parameter (and at least one more than the parameters).
+pub(crate) fn minimum_fit_samples(parameters: usize) -> usize {
+    (SAMPLES_PER_PARAMETER * parameters).max(parameters + 1)
+}
+
+/// Pearson's correlation coefficient of two equally long, non-empty series (NaN when one is
+/// constant).
+pub(crate) fn correlation(a: &[f64], b: &[f64]) -> f64 {
+    let n = a.len().min(b.len()) as f64;
+    let mean_a = a.iter().sum::<f64>() / n;
+    let mean_b = b.iter().sum::<f64>() / n;
+    let (mut ab, mut aa, mut bb) = (0.0, 0.0, 0.0);
+    for (x, y) in a.iter().zip(b) {
+        let (dx, dy) = (x - mean_a, y - mean_b);
+        ab += dx * dy;
+        aa += dx * dx;
+        bb += dy * dy;
+    }
+    ab / (aa.sqrt() * bb.sqrt())
+}
+
+/// Refuses fitted samples whose displacement does not rise with the voltage (Pearson
+/// correlation below [`MIN_CORRELATION`]: wrong column, wrong sign, a column of noise) or is
+/// an exact linear function of it (the same column given twice: a trivial fit).
+pub(crate) fn check_rises(voltage: &[f64], displacement: &[f64]) -> Result<(), IdentifyError> {
+    if voltage == displacement {
+        return Err(IdentifyError::SameSignal);
+    }
+    let r = correlation(voltage, displacement);
+    if r.is_nan() || r < MIN_CORRELATION {
+        return Err(IdentifyError::NotRising {
+            correlation: r,
+            minimum: MIN_CORRELATION,
+        });
+    }
+    if r > 1.0 - 1e-12 {
+        return Err(IdentifyError::SameSignal);
+    }
+    Ok(())
 }
 
 /// The first sample whose value is within [`AUTO_WARMUP_LEVEL`] of the range from the minimum.

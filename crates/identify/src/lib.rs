@@ -10,9 +10,20 @@
 //!
 //! # One problem, two solvers
 //! With the thresholds fixed, the MPIM is linear in `(a1, a2, b_i)`. [`FitProblem`] holds the
-//! RMS model error of any parameter vector and the linear constraints that make the model
-//! invertible (and, for plant models, give the inverse of eq. (7) and a convergent delayed
-//! WIHC). Two [`Solver`]s minimise it:
+//! RMS model error of any parameter vector and the linear constraints it must meet:
+//!
+//! - both directions: the model is **strictly increasing along every branch** (every branch
+//!   slope `a2 + 3 a1 x^2 + b_1 + ... + b_k >= margin` over the fitted input range), so that
+//!   it is invertible (the core's `check_invertible`, ERRATA item 5);
+//! - plant models, **beyond that**: the play-operator part `a2 + b_1 + ... + b_k >= margin`
+//!   for every `k`, so that the analytic inverse of eq. (7) exists and IHC can be built, and
+//!   `|3 a1 x^2 + b_1| <= a2 - margin` over the range, so that the one-sample-delayed WIHC of
+//!   eq. (9) converges. A model that is increasing along every branch may violate these; the
+//!   constrained optimum is then (slightly) worse than the best merely invertible model.
+//!
+//! Before solving, the fitted samples' displacement must rise with the voltage (Pearson
+//! correlation at least [`MIN_CORRELATION`]); after, the RMS error must not exceed
+//! [`IdentifyOptions::max_fit_rms_percent`] (10 % by default). Two [`Solver`]s minimise it:
 //!
 //! - [`LeastSquares`] (`ls`, the default): the exact global optimum for those thresholds
 //!   (QR, then a QP with Clarabel when a constraint binds, then an exact active-set solve);
@@ -69,8 +80,9 @@ pub use error::IdentifyError;
 pub use identification::{Identification, identify, identify_observed};
 pub use ls::LeastSquares;
 pub use options::{
-    AUTO_WARMUP_LEVEL, DEFAULT_MARGIN, DEFAULT_MAX_CONDITION, DEFAULT_OPERATORS, IdentifyOptions,
-    Method, OutputOffset, SAMPLES_PER_PARAMETER, Thresholds, Warmup,
+    AUTO_WARMUP_LEVEL, DEFAULT_MARGIN, DEFAULT_MAX_CONDITION, DEFAULT_MAX_FIT_RMS_PERCENT,
+    DEFAULT_OPERATORS, IdentifyOptions, MIN_CORRELATION, Method, OutputOffset,
+    SAMPLES_PER_PARAMETER, Thresholds, Warmup,
 };
 pub use problem::{Constraint, ConstraintKind, FitProblem, Parameters, ProblemData};
 pub use pso::{

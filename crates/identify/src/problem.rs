@@ -353,6 +353,15 @@ impl FitProblem {
             .fold(f64::INFINITY, f64::min)
     }
 
+    /// The number of constraints that hold with equality at `theta`, within `tolerance`
+    /// (normalised slope units): `a_j . theta - margin <= tolerance`.
+    pub fn active_count(&self, theta: &[f64], tolerance: f64) -> usize {
+        self.constraints
+            .iter()
+            .filter(|c| dot(&c.coefficients, theta) - self.margin <= tolerance)
+            .count()
+    }
+
     /// The model parameters of a parameter vector (the zero-threshold split applied).
     pub fn parameters(&self, theta: &[f64]) -> Parameters {
         let full = self.to_full(theta);

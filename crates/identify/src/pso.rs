@@ -1,7 +1,20 @@
-//! Particle swarm optimisation of the fitting problem, as the paper identifies its models
-//! (section 4.2, after its ref. \[39\]: Yang, Gu & Zhu, *Sensors and Actuators A* **189** (2013)
-//! 254-265, doi:10.1016/j.sna.2012.09.021).
+//! Particle swarm optimisation of the fitting problem: the paper identifies its models with a
+//! particle swarm (section 4.2), citing its ref. \[39\] for the choice: M.-J. Yang, G.-Y. Gu and
+//! L.-M. Zhu, "Parameter identification of the generalized Prandtl-Ishlinskii model for
+//! piezoelectric actuators using **modified** particle swarm optimization", *Sensors and
+//! Actuators A* **189** (2013) 254-265, doi:10.1016/j.sna.2012.09.021.
 //!
+//! # What this is, relative to \[39\]
+//! \[39\] proposes a *modified* PSO; the paper (Gu & Zhu 2014) only says that a PSO is used and
+//! that \[39\] showed PSO superior for Prandtl-Ishlinskii identification. It gives neither the
+//! modification nor any setting (swarm size, iterations, coefficients, bounds), and \[39\]'s
+//! text is not part of this project. We therefore do **not** implement \[39\]'s modified
+//! algorithm: we implement the standard swarm below, with the literature's defaults, made
+//! reproducible (one seed) and extended by constraint handling (the invertibility constraints
+//! of [`FitProblem`]) and an optional least-squares polish, neither of which the paper
+//! describes.
+//!
+//! # The algorithm
 //! A global-best swarm (Kennedy & Eberhart, "Particle swarm optimization", Proc. ICNN 1995,
 //! doi:10.1109/ICNN.1995.488968) with an inertia weight (Shi & Eberhart, "A modified particle
 //! swarm optimizer", Proc. IEEE ICEC 1998, doi:10.1109/ICEC.1998.699146). The defaults are

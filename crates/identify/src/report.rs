@@ -114,7 +114,8 @@ pub struct FitReport {
     pub condition_number: f64,
     /// Number of linear constraints.
     pub constraints: usize,
-    /// Number of constraints holding with equality.
+    /// Number of constraints holding with equality at the final parameters (slack at most
+    /// 1e-6 in normalised slope units).
     pub active_constraints: usize,
     /// The slope margin every constraint demands (normalised).
     pub margin: f64,

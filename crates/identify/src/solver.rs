@@ -34,6 +34,10 @@ pub struct Progress {
 pub trait Observer {
     /// Called after each iteration.
     fn observe(&mut self, progress: &Progress);
+
+    /// Called when a new identification starts, when one observer watches several (as in
+    /// [`crate::crossval()`]: `plant model`, then `inverse model`). Does nothing by default.
+    fn begin(&mut self, _label: &str) {}
 }
 
 impl<F: FnMut(&Progress)> Observer for F {

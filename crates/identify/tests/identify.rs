@@ -187,10 +187,13 @@ proptest! {
                     method,
                     thresholds: Thresholds::Uniform(n),
                     max_condition: 1e14,
+                    max_fit_rms_percent: None,
                     ..IdentifyOptions::default()
                 };
                 let fit = match identify(&x, &y, &options) {
                     Ok(fit) => fit,
+                    // Random models may fall as the input rises: refused as such.
+                    Err(IdentifyError::NotRising { .. }) => continue,
                     // A swarm may end infeasible; it must say so, never return a bad model.
                     Err(IdentifyError::SwarmInfeasible { .. }) => continue,
                     Err(IdentifyError::IllConditioned { .. }) => continue,
@@ -200,6 +203,11 @@ proptest! {
                 let slope = m.check_invertible(0.0, 1.0).unwrap();
                 prop_assert!(slope.slope >= 1e-3 * (1.0 - 1e-6));
                 prop_assert!((slope.slope - fit.report.min_branch_slope).abs() < 1e-12);
+                // The report counts the constraints active at the final parameters: a branch
+                // slope at the margin is one of them.
+                if slope.slope - 1e-3 < 1e-9 {
+                    prop_assert!(fit.report.active_constraints >= 1, "{}", fit.report.detail);
+                }
                 let limits = OutputLimits::new(0.0, 1.0).unwrap();
                 if direction == Direction::Plant {
                     for mode in [SolveMode::Exact, SolveMode::Delayed] {
@@ -598,8 +606,9 @@ fn bad_records_and_options_are_refused_with_a_clear_message() {
     assert!(PsoOptions::default().with_particles(1).is_err());
     assert!(PsoOptions::default().with_inertia(f64::NAN, 0.4).is_err());
     assert!(PsoOptions::default().with_acceleration(2.0, -1.0).is_err());
-    // After the warm-up the input only wiggles by 0.1: the operators with larger thresholds
-    // stand still, their columns are constant, and the data cannot tell them apart.
+    // Two thresholds 1e-12 apart: their operators' columns are equal to 1e-12, and the data
+    // cannot tell them apart. (The ranges are those of the fitted samples, so a record that
+    // only wiggles after its warm-up is normalised to [0, 1] and identifies fine.)
     let mut wiggle: Vec<f64> = (0..=100).map(|k| k as f64 / 100.0).collect();
     wiggle.extend((0..50).map(|k| 1.0 - k as f64 / 100.0));
     wiggle.extend((0..400).map(|k| 0.5 + 0.05 * (k as f64 * 0.3).sin()));
@@ -608,10 +617,29 @@ fn bad_records_and_options_are_refused_with_a_clear_message() {
         &wiggle,
         &out,
         &IdentifyOptions {
-            warmup: Warmup::Samples(151),
-            ..options
+            thresholds: Thresholds::Given(vec![0.0, 0.5, 0.5 + 1e-12]),
+            warmup: Warmup::Samples(0),
+            ..options.clone()
         },
     )
     .unwrap_err();
     assert!(matches!(err, IdentifyError::IllConditioned { .. }), "{err}");
+    let fit = identify(
+        &wiggle,
+        &out,
+        &IdentifyOptions {
+            warmup: Warmup::Samples(151),
+            ..options
+        },
+    )
+    .unwrap();
+    let fitted = &wiggle[151..];
+    let lo = fitted.iter().copied().fold(f64::INFINITY, f64::min);
+    let hi = fitted.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+    assert_eq!((fit.report.input.min, fit.report.input.max), (lo, hi));
+    assert!(
+        fit.report.fit.rms_percent < 0.1,
+        "{}",
+        fit.report.fit.rms_percent
+    );
 }
