@@ -721,7 +721,14 @@ impl fmt::Display for DataError {
                             }
                         }))
                     ),
+                }?;
+                if count == 1 {
+                    f.write_str(
+                        ". Only one column was found: if the file has more, check --delimiter \
+                         (auto, comma, tab, semicolon or whitespace)",
+                    )?;
                 }
+                Ok(())
             }
             DataError::AmbiguousColumn {
                 path,
@@ -1325,12 +1332,78 @@ fn real_values(data: &matfile::NumericData) -> Option<Vec<f64>> {
     }
 }
 
+/// Why a Level-5 MAT-file is cut short, if it is: walks the data elements' tags after the
+/// 128-byte header (each tag gives its element's type and size) and reports the first element
+/// that reaches past the end of the file. The MAT-file reader itself stops silently there, and
+/// the file would seem to hold fewer (or no) variables.
+fn mat_truncation(bytes: &[u8]) -> Option<String> {
+    const HEADER: usize = 128;
+    let little = match bytes.get(126..HEADER) {
+        Some(b"IM") => true,
+        Some(b"MI") => false,
+        _ => return None,
+    };
+    let word = |at: usize| -> Option<u32> {
+        let b: [u8; 4] = bytes.get(at..at + 4)?.try_into().ok()?;
+        Some(if little {
+            u32::from_le_bytes(b)
+        } else {
+            u32::from_be_bytes(b)
+        })
+    };
+    let damaged = |at: usize, needed: usize| {
+        Some(format!(
+            "the file is truncated or damaged: the variable stored at byte {at} needs {needed} \
+             bytes but the file ends after {}; copy it again from its source, or save it again \
+             with save(..., '-v7')",
+            bytes.len() - at
+        ))
+    };
+    let mut at = HEADER;
+    while at < bytes.len() {
+        let Some(kind) = word(at) else {
+            return damaged(at, 8);
+        };
+        if kind >> 16 != 0 {
+            // Small data element: tag and data in 8 bytes.
+            if at + 8 > bytes.len() {
+                return damaged(at, 8);
+            }
+            at += 8;
+            continue;
+        }
+        let Some(size) = word(at + 4) else {
+            return damaged(at, 8);
+        };
+        let size = size as usize;
+        // miCOMPRESSED (15) elements are not padded; the others are, to a multiple of 8 bytes
+        // (the padding of the last element included: MATLAB and SciPy write it).
+        let padded = if kind == 15 {
+            size
+        } else {
+            size.div_ceil(8) * 8
+        };
+        let needed = 8 + padded;
+        if at + needed > bytes.len() {
+            return damaged(at, needed);
+        }
+        at += needed;
+    }
+    None
+}
+
 fn read_mat(
     path: &Path,
     bytes: &[u8],
     columns: &[Column],
     options: &ReadOptions,
 ) -> Result<Columns, DataError> {
+    if let Some(reason) = mat_truncation(bytes) {
+        return Err(DataError::MatUnreadable {
+            path: path.to_owned(),
+            reason,
+        });
+    }
     // The reader is third-party code given untrusted bytes: a panic inside it becomes an error.
     let parsed = std::panic::catch_unwind(|| matfile::MatFile::parse(bytes)).map_err(|_| {
         DataError::MatUnreadable {

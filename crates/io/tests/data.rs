@@ -1458,6 +1458,64 @@ fn other_mat_files_get_a_clear_message() {
     assert_contains(&message, &["damaged.mat"]);
 }
 
+/// A Level-5 file cut short anywhere after its header (a partial copy or download) says it is
+/// truncated or damaged, never that it holds no variables, and never panics.
+#[test]
+fn truncated_level5_files_say_they_are_truncated() {
+    let dir = dir();
+    for name in ["scipy_record.mat", "scipy_record_compressed.mat"] {
+        let bytes = fs::read(fixture(name)).expect("the fixture");
+        // The element boundaries (cut there, the file is a valid file with fewer variables).
+        let mut boundaries = vec![128];
+        while let Some(&at) = boundaries.last().filter(|&&at| at < bytes.len()) {
+            let word = |i: usize| u32::from_le_bytes(bytes[i..i + 4].try_into().unwrap()) as usize;
+            let (kind, size) = (word(at), word(at + 4));
+            boundaries.push(
+                at + 8
+                    + if kind == 15 {
+                        size
+                    } else {
+                        size.div_ceil(8) * 8
+                    },
+            );
+        }
+        assert_eq!(boundaries.last(), Some(&bytes.len()), "{name}: the walk");
+        let mut lengths: Vec<usize> = (129..bytes.len()).step_by(7).collect();
+        lengths.extend([129, 136, bytes.len() - 1]);
+        for len in lengths.into_iter().filter(|len| !boundaries.contains(len)) {
+            let path = file(dir.path(), "cut.mat", &bytes[..len]);
+            let (error, message) = read_error(&path, &["u"], &ReadOptions::default());
+            assert!(
+                matches!(error, DataError::MatUnreadable { .. }),
+                "{name} cut at {len}: {error:?}"
+            );
+            assert_contains(&message, &["cut.mat", "truncated or damaged"]);
+        }
+    }
+}
+
+/// A tab-separated file read with --delimiter comma has one column holding whole lines: the
+/// message says so and points at the delimiter.
+#[test]
+fn a_wrong_delimiter_gets_a_hint() {
+    let dir = dir();
+    let path = file(dir.path(), "tabs.dat", "1.8\t0\t-123.1\n1.9\t0\t-122.0\n");
+    let options = ReadOptions {
+        delimiter: Delimiter::Comma,
+        ..ReadOptions::default()
+    };
+    let (error, message) = read_error(&path, &["1", "3"], &options);
+    assert!(matches!(error, DataError::NoSuchColumn { .. }), "{error:?}");
+    assert_contains(&message, &["tabs.dat", "1 column", "--delimiter"]);
+    // With the right delimiter there is no such hint (the column really is missing).
+    let options = ReadOptions {
+        delimiter: Delimiter::Tab,
+        ..ReadOptions::default()
+    };
+    let (_, message) = read_error(&path, &["4"], &options);
+    assert!(!message.contains("--delimiter"), "{message}");
+}
+
 // ---------------------------------------------------------------------------------------------
 // The real micromanipulator records (read from ../shared when present)
 // ---------------------------------------------------------------------------------------------
