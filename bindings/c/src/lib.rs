@@ -193,7 +193,7 @@ impl From<CompensatorError> for Failure {
 impl From<ModelFileError> for Failure {
     fn from(e: ModelFileError) -> Self {
         let status = match &e {
-            ModelFileError::Io { .. } => HystcompStatus::Io,
+            ModelFileError::Io { .. } | ModelFileError::Write(_) => HystcompStatus::Io,
             _ => HystcompStatus::InvalidModelFile,
         };
         Failure::new(status, e.to_string())

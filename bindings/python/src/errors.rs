@@ -108,9 +108,22 @@ pub fn compensator(e: CompensatorError) -> PyErr {
 /// A model file that could not be read, parsed, validated or written.
 pub fn model_file(e: ModelFileError) -> PyErr {
     match e {
-        ModelFileError::Io { path, source } => {
-            let message = format!("{path}: {source}");
-            os_error(source.kind(), source.raw_os_error(), message, path)
+        ModelFileError::Io {
+            ref path,
+            ref source,
+        } => {
+            let (kind, errno, path) = (source.kind(), source.raw_os_error(), path.clone());
+            os_error(kind, errno, e.to_string(), path)
+        }
+        ModelFileError::Write(ref source) => {
+            // The message already names the path (write_atomic).
+            let message = e.to_string();
+            match source.kind() {
+                io::ErrorKind::NotFound => PyFileNotFoundError::new_err(message),
+                io::ErrorKind::PermissionDenied => PyPermissionError::new_err(message),
+                io::ErrorKind::IsADirectory => PyIsADirectoryError::new_err(message),
+                _ => PyOSError::new_err(message),
+            }
         }
         ModelFileError::Model(c) => {
             let kind = core_kind(&c);

@@ -207,6 +207,160 @@ fn bad_inputs_give_clear_messages_and_non_zero_exits() {
     assert!(!out.exists());
 }
 
+/// `y_d = 35 + 20 sin(2 pi t)` um at 10 kHz for one second, starting at 35 um (a jump from rest).
+fn sine_from_rest(dir: &Path) -> PathBuf {
+    let time: Vec<f64> = (0..10_000).map(|k| k as f64 * 1e-4).collect();
+    let desired: Vec<f64> = time
+        .iter()
+        .map(|t| 35.0 + 20.0 * (2.0 * std::f64::consts::PI * t).sin())
+        .collect();
+    let path = dir.join("sine.csv");
+    hystcomp_io::data::write_csv(&path, &["time_s", "desired_um"], &[&time, &desired]).unwrap();
+    path
+}
+
+#[test]
+fn delayed_wihc_ringing_is_reported_as_such_not_as_unreachable_positions() {
+    let dir = tempfile::tempdir().unwrap();
+    let trajectory = sine_from_rest(dir.path());
+    let model = models().join("table1-plant.json");
+    let out = dir.path().join("drive.csv");
+    let run = |method: &str| {
+        hystcomp(&[
+            "compensate",
+            "--model",
+            s(&model),
+            "--method",
+            method,
+            "--trajectory",
+            s(&trajectory),
+            "-o",
+            s(&out),
+            "--json",
+        ])
+    };
+    // The exact WIHC reaches every sample: nothing clamped, exit 0.
+    let o = run("wihc");
+    assert!(o.status.success(), "{}", stderr(&o));
+    let report: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert_eq!(report["unreachable"], 0, "{report}");
+    assert_eq!(report["loop_saturated"], 0, "{report}");
+    assert_eq!(report["saturated"], 0, "{report}");
+    let gain = report["delayed_loop_gain"].as_f64().unwrap();
+    assert!(gain >= 1.0, "Table 1's delayed loop gain {gain}");
+    // The delayed WIHC rings between 0 and 10 V after the jump: a loop saturation.
+    let o = run("wihc-delayed");
+    let message = stderr(&o);
+    assert_eq!(o.status.code(), Some(4), "{message}");
+    let report: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert_eq!(report["unreachable"], 0, "{report}");
+    let looped = report["loop_saturated"].as_u64().unwrap();
+    assert!(looped > 10, "{report}");
+    assert_eq!(report["saturated"].as_u64().unwrap(), looped, "{report}");
+    assert!(report["first_loop_saturated_time_s"].as_f64().unwrap() < 0.01);
+    assert!(report["first_unreachable_time_s"].is_null(), "{report}");
+    assert!(
+        !message.contains("outside what the model can reach"),
+        "{message}"
+    );
+    assert!(
+        message.contains("warning: the delayed WIHC's loop gain"),
+        "{message}"
+    );
+    assert!(message.contains("--method wihc"), "{message}");
+    assert!(message.contains("within reach"), "{message}");
+    assert!(message.contains(&format!("{gain:.3} >= 1")), "{message}");
+    // The ringing stays within the limits, and the drive file is written.
+    let drive = &read(&out)[1];
+    assert!(drive.iter().all(|v| (0.0..=10.0).contains(v)));
+    assert!(
+        drive[..40].iter().filter(|v| **v == 10.0).count() > 5,
+        "rings"
+    );
+}
+
+#[test]
+fn dihc_says_its_desired_positions_were_clamped_into_the_models_range() {
+    let dir = tempfile::tempdir().unwrap();
+    let time: Vec<f64> = (0..400).map(|k| k as f64 * 1e-3).collect();
+    // Table 2's inverse model accepts 0 .. 75 um.
+    let desired: Vec<f64> = time.iter().map(|t| 40.0 + 50.0 * (9.0 * t).sin()).collect();
+    let traj = dir.path().join("wide.csv");
+    hystcomp_io::data::write_csv(&traj, &["t", "y"], &[&time, &desired]).unwrap();
+    let out = dir.path().join("out.csv");
+    let o = hystcomp(&[
+        "compensate",
+        "--model",
+        s(&models().join("table2-inverse.json")),
+        "--method",
+        "dihc",
+        "--trajectory",
+        s(&traj),
+        "-o",
+        s(&out),
+        "--json",
+    ]);
+    let message = stderr(&o);
+    assert_eq!(o.status.code(), Some(4), "{message}");
+    let outside = desired.iter().filter(|d| **d < 0.0 || **d > 75.0).count();
+    assert!(outside > 0);
+    assert!(
+        message.contains(&format!(
+            "{outside} of 400 desired positions lie outside the range 0.0000 .. 75.0000 um"
+        )),
+        "{message}"
+    );
+    assert!(message.contains("DIHC clamped them into it"), "{message}");
+    assert!(!message.contains("the drive was clamped"), "{message}");
+    let report: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert_eq!(report["unreachable"].as_u64().unwrap(), outside as u64);
+    assert_eq!(report["loop_saturated"], 0);
+    assert_eq!(report["desired_range"], serde_json::json!([0.0, 75.0]));
+}
+
+#[test]
+fn unreadable_models_and_infinite_positions_are_refused_clearly() {
+    let dir = tempfile::tempdir().unwrap();
+    let (trajectory, _) = reachable_trajectory(dir.path());
+    let out = dir.path().join("o.csv");
+    // A directory where the model file should be.
+    let o = hystcomp(&[
+        "compensate",
+        "--model",
+        s(dir.path()),
+        "--method",
+        "ihc",
+        "--trajectory",
+        s(&trajectory),
+        "-o",
+        s(&out),
+    ]);
+    let message = stderr(&o);
+    assert_eq!(o.status.code(), Some(1), "{message}");
+    assert!(message.contains(s(dir.path())), "{message}");
+    assert!(message.contains("directory"), "{message}");
+    assert!(!message.contains("panicked"), "{message}");
+    // An infinite desired position.
+    let inf = dir.path().join("inf.csv");
+    std::fs::write(&inf, "t,y\n0,10\n0.001,inf\n0.002,11\n").unwrap();
+    let o = hystcomp(&[
+        "compensate",
+        "--model",
+        s(&models().join("table1-plant.json")),
+        "--method",
+        "ihc",
+        "--trajectory",
+        s(&inf),
+        "-o",
+        s(&out),
+    ]);
+    let message = stderr(&o);
+    assert_eq!(o.status.code(), Some(1), "{message}");
+    assert!(message.to_lowercase().contains("inf"), "{message}");
+    assert!(message.contains(s(&inf)), "{message}");
+    assert!(!out.exists());
+}
+
 #[test]
 fn bench_reports_every_compensator_for_10_and_100_operators() {
     let o = hystcomp(&["bench", "--samples", "2000", "--repeats", "3", "--json"]);
@@ -215,6 +369,7 @@ fn bench_reports_every_compensator_for_10_and_100_operators() {
     let figures = report["figures"].as_array().unwrap();
     for what in [
         "mpim-forward",
+        "mpim-chained",
         "ihc",
         "ihc-delayed",
         "wihc",
@@ -222,14 +377,78 @@ fn bench_reports_every_compensator_for_10_and_100_operators() {
         "dihc",
     ] {
         for n in [10, 100] {
-            let f = figures
-                .iter()
-                .find(|f| f["what"] == what && f["operators"] == n && f["precision"] == "f64")
-                .unwrap_or_else(|| panic!("no figure for {what} n = {n}"));
-            let ns = f["median_ns_per_sample"].as_f64().unwrap();
-            assert!(ns > 0.0 && ns.is_finite(), "{what} {n}: {ns}");
+            for precision in ["f64", "f32"] {
+                let f = figures
+                    .iter()
+                    .find(|f| {
+                        f["what"] == what && f["operators"] == n && f["precision"] == precision
+                    })
+                    .unwrap_or_else(|| panic!("no figure for {what} n = {n} {precision}"));
+                let ns = f["median_ns_per_sample"].as_f64().unwrap();
+                let min = f["min_ns_per_sample"].as_f64().unwrap();
+                assert!(ns > 0.0 && ns.is_finite(), "{what} {n} {precision}: {ns}");
+                assert!(
+                    min > 0.0 && min <= ns,
+                    "{what} {n} {precision}: {min} > {ns}"
+                );
+            }
         }
     }
+    // Exactly those: 7 kinds x 2 sizes x 2 precisions, no figure twice.
+    assert_eq!(figures.len(), 7 * 2 * 2, "{report}");
+    assert_eq!(report["samples"], 2000);
+    assert_eq!(report["repeats"], 3);
     let o = hystcomp(&["bench", "--samples", "10"]);
     assert!(!o.status.success());
+    assert!(stderr(&o).contains("--samples must be at least 100"));
+}
+
+#[test]
+fn bench_times_a_model_file_too() {
+    let plant = models().join("table1-plant.json");
+    let inverse = models().join("table2-inverse.json");
+    let figures_for = |model: &Path| {
+        let o = hystcomp(&[
+            "bench",
+            "--samples",
+            "500",
+            "--repeats",
+            "1",
+            "--model",
+            s(model),
+            "--json",
+        ]);
+        assert!(o.status.success(), "{}", stderr(&o));
+        let report: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+        report["figures"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .filter(|f| f["model"] == s(model))
+            .map(|f| {
+                assert_eq!(f["operators"], 10);
+                assert!(f["median_ns_per_sample"].as_f64().unwrap() > 0.0);
+                f["what"].as_str().unwrap().to_string()
+            })
+            .collect::<Vec<_>>()
+    };
+    let mut plant_figures = figures_for(&plant);
+    plant_figures.sort();
+    assert_eq!(
+        plant_figures,
+        [
+            "ihc",
+            "ihc-delayed",
+            "mpim-chained",
+            "mpim-forward",
+            "wihc",
+            "wihc-delayed"
+        ]
+    );
+    assert_eq!(figures_for(&inverse), ["dihc"]);
+    // A missing model file is refused with its path.
+    assert_fails(
+        &["bench", "--model", "/no/such/model.json"],
+        &["/no/such/model.json"],
+    );
 }

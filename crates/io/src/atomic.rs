@@ -22,7 +22,8 @@ const NAME_PREFIX_LIMIT: usize = 64;
 /// - When `path` is a symbolic link, the file it points to is replaced and the link kept.
 /// - A directory at `path` is refused ([`io::ErrorKind::IsADirectory`]).
 ///
-/// Errors name the path: `could not write out/model.json: ...`.
+/// Errors name the path once: `could not write out/model.json: the folder out does not exist`;
+/// callers that add context should not repeat it.
 pub fn write_atomic(path: &Path, contents: &[u8]) -> io::Result<()> {
     write_atomic_with(path, |out| out.write_all(contents))
 }
@@ -104,7 +105,9 @@ where
         builder.permissions(fs::Permissions::from_mode(0o666));
     }
     // Dropping `temporary` on any early return removes the temporary file.
-    let mut temporary = builder.tempfile_in(dir)?;
+    let mut temporary = builder
+        .tempfile_in(dir)
+        .map_err(|error| temporary_file_error(dir, error))?;
     if let Some(permissions) = existing {
         temporary.as_file().set_permissions(permissions)?;
     }
@@ -116,6 +119,35 @@ where
     temporary.as_file().sync_all()?;
     temporary.persist(target).map_err(|error| error.error)?;
     sync_directory(dir)
+}
+
+/// Why the temporary file could not be created, said in terms of the target's folder (the
+/// temporary file's own name means nothing to the reader, and the caller names the target).
+fn temporary_error_message(dir: &Path, error: &io::Error) -> String {
+    match error.kind() {
+        io::ErrorKind::NotFound => format!("the folder {} does not exist", dir.display()),
+        io::ErrorKind::PermissionDenied => format!(
+            "no permission to create files in the folder {}",
+            dir.display()
+        ),
+        _ => {
+            // tempfile appends ` at path "<the temporary file>"`; drop it.
+            let text = error.to_string();
+            let reason = text
+                .split(" at path \"")
+                .next()
+                .unwrap_or(&text)
+                .to_string();
+            format!(
+                "cannot create a temporary file in the folder {}: {reason}",
+                dir.display()
+            )
+        }
+    }
+}
+
+fn temporary_file_error(dir: &Path, error: io::Error) -> io::Error {
+    io::Error::new(error.kind(), temporary_error_message(dir, &error))
 }
 
 /// Flushes a directory entry change (the rename) to disk where the platform allows it.

@@ -168,6 +168,10 @@ pub struct ScaledCompensator {
     /// Physical meaning of the control (the compensator's output).
     control: Scale,
     limits: (f64, f64),
+    /// The worst-case loop gain of the delayed WIHC, for `wihc` and `wihc-delayed`.
+    delayed_loop_gain: Option<f64>,
+    /// DIHC: the desired positions the inverse model accepts, physical units.
+    desired_range: Option<(f64, f64)>,
 }
 
 impl fmt::Debug for ScaledCompensator {
@@ -218,17 +222,18 @@ impl ScaledCompensator {
         let normalised = OutputLimits::new(control.normalise(min), control.normalise(max))?;
         let mpim: Mpim<f64, Vec<f64>> =
             Mpim::new(&model.thresholds, &model.weights, model.a1, model.a2)?;
+        let mut delayed_loop_gain = None;
         let inner: Box<dyn Compensator<f64> + Send> = match method {
             Method::Ihc | Method::IhcDelayed => Box::new(Ihc::<f64, Vec<f64>>::new(
                 &mpim,
                 normalised,
                 method.solve_mode(),
             )?),
-            Method::Wihc | Method::WihcDelayed => Box::new(Wihc::<f64, Vec<f64>>::new(
-                &mpim,
-                normalised,
-                method.solve_mode(),
-            )?),
+            Method::Wihc | Method::WihcDelayed => {
+                let wihc = Wihc::<f64, Vec<f64>>::new(&mpim, normalised, method.solve_mode())?;
+                delayed_loop_gain = Some(wihc.delayed_loop_gain().gain);
+                Box::new(wihc)
+            }
             Method::Dihc => Box::new(Dihc::<f64, Vec<f64>>::new(
                 &mpim,
                 model.input_range[0],
@@ -236,12 +241,21 @@ impl ScaledCompensator {
                 normalised,
             )?),
         };
+        let desired_range = (method == Method::Dihc).then(|| {
+            let (a, b) = (
+                desired.to_physical(model.input_range[0]),
+                desired.to_physical(model.input_range[1]),
+            );
+            (a.min(b), a.max(b))
+        });
         Ok(ScaledCompensator {
             inner,
             method,
             desired,
             control,
             limits: (min, max),
+            delayed_loop_gain,
+            desired_range,
         })
     }
 
@@ -253,6 +267,22 @@ impl ScaledCompensator {
     /// The drive limits `(min, max)`, in [`ScaledCompensator::control_unit`].
     pub fn limits(&self) -> (f64, f64) {
         self.limits
+    }
+
+    /// For `wihc` and `wihc-delayed`: the worst-case small-signal loop gain of the delayed
+    /// WIHC over the drive limits, `max |3 a1 x^2 + b_1 + ... + b_k| / a2` (eq. (9) with
+    /// `H[v](t - Ts)`; see [`hystcomp_core::Wihc::delayed_loop_gain`]). At or above 1 the
+    /// delayed loop can ring between the limits after a jump in the desired position; the
+    /// exact `wihc` does not. `None` for the other methods.
+    pub fn delayed_loop_gain(&self) -> Option<f64> {
+        self.delayed_loop_gain
+    }
+
+    /// For `dihc`: the range of desired positions (physical units, increasing) the inverse
+    /// model was identified on; DIHC clamps the desired position into it (eq. (10)). `None` for
+    /// the other methods.
+    pub fn desired_range(&self) -> Option<(f64, f64)> {
+        self.desired_range
     }
 
     /// The unit of the desired position (the input).
@@ -300,7 +330,9 @@ impl ScaledCompensator {
         Ok(())
     }
 
-    /// Saturated and non-finite samples since the last reset.
+    /// Saturated (desired position out of reach), loop-saturated (drive clamped by a delayed
+    /// loop although the position was reachable) and non-finite samples since the last reset
+    /// (see [`hystcomp_core::Diagnostics`]).
     pub fn diagnostics(&self) -> Diagnostics {
         self.inner.diagnostics()
     }

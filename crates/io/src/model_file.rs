@@ -119,13 +119,16 @@ pub struct ModelFile {
 /// Why a model file could not be read, written or used.
 #[derive(Debug)]
 pub enum ModelFileError {
-    /// The file could not be read or written.
+    /// The file could not be read.
     Io {
         /// The file.
         path: String,
         /// The operating system's reason.
         source: std::io::Error,
     },
+    /// The file could not be written; the error names the path
+    /// (see [`crate::atomic::write_atomic`]).
+    Write(std::io::Error),
     /// The file is not valid JSON, or not of this format.
     Parse {
         /// The file.
@@ -152,7 +155,27 @@ pub enum ModelFileError {
 impl fmt::Display for ModelFileError {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match self {
-            ModelFileError::Io { path, source } => write!(f, "{path}: {source}"),
+            ModelFileError::Io { path, source } => {
+                if source.kind() == std::io::ErrorKind::IsADirectory {
+                    write!(
+                        f,
+                        "cannot read {path}: it is a directory; give a model file (.json)"
+                    )
+                } else if source.kind() == std::io::ErrorKind::NotFound {
+                    write!(
+                        f,
+                        "cannot read {path}: no such file (check the path and file name)"
+                    )
+                } else if source.kind() == std::io::ErrorKind::InvalidData {
+                    write!(
+                        f,
+                        "cannot read {path}: it is not UTF-8 text ({source}); a model file is JSON"
+                    )
+                } else {
+                    write!(f, "cannot read {path}: {source}")
+                }
+            }
+            ModelFileError::Write(source) => write!(f, "{source}"),
             ModelFileError::Parse { path, message } => {
                 write!(f, "{path} is not a valid hystcomp model file: {message}")
             }
@@ -340,10 +363,8 @@ impl ModelFile {
     /// Writes the file atomically (temporary file, then rename).
     pub fn save(&self, path: &Path) -> Result<(), ModelFileError> {
         self.validate()?;
-        write_atomic(path, self.to_json().as_bytes()).map_err(|source| ModelFileError::Io {
-            path: path.display().to_string(),
-            source,
-        })
+        // The error of write_atomic already reads "could not write PATH: reason".
+        write_atomic(path, self.to_json().as_bytes()).map_err(ModelFileError::Write)
     }
 
     /// Runs the model over a whole record in physical units, from zero memory (eq. (1)):

@@ -109,3 +109,50 @@ proptest! {
         }
     }
 }
+
+#[test]
+fn wihc_reports_its_delayed_loop_gain_and_dihc_its_desired_range() {
+    let plant = example("table1-plant.json");
+    let inverse = example("table2-inverse.json");
+    // Table 1 over 0..10 V: all ten operators moving near 0 V, (b_1 + ... + b_10) / a2.
+    let expected = plant.weights.iter().sum::<f64>() / plant.a2;
+    for method in [Method::Wihc, Method::WihcDelayed] {
+        let c = ScaledCompensator::new(&plant, method, None).unwrap();
+        let gain = c.delayed_loop_gain().unwrap();
+        assert!((gain - expected).abs() < 1e-12, "{method}: {gain}");
+        assert!(gain > 1.0);
+        assert_eq!(c.desired_range(), None);
+    }
+    for method in [Method::Ihc, Method::IhcDelayed] {
+        assert_eq!(
+            ScaledCompensator::new(&plant, method, None)
+                .unwrap()
+                .delayed_loop_gain(),
+            None
+        );
+    }
+    let dihc = ScaledCompensator::new(&inverse, Method::Dihc, None).unwrap();
+    let lo = inverse.input.to_physical(inverse.input_range[0]);
+    let hi = inverse.input.to_physical(inverse.input_range[1]);
+    assert_eq!(dihc.desired_range(), Some((lo.min(hi), lo.max(hi))));
+    assert_eq!(dihc.delayed_loop_gain(), None);
+}
+
+#[test]
+fn delayed_wihc_ringing_on_table1_is_a_loop_saturation_not_an_unreachable_position() {
+    let plant = example("table1-plant.json");
+    let mut delayed = ScaledCompensator::new(&plant, Method::WihcDelayed, None).unwrap();
+    let mut exact = ScaledCompensator::new(&plant, Method::Wihc, None).unwrap();
+    // 35 + 20 sin(2 pi t) um from rest at 10 kHz: reachable all along (the exact WIHC says so).
+    for k in 0..10_000 {
+        let y = 35.0 + 20.0 * (2.0 * std::f64::consts::PI * k as f64 * 1e-4).sin();
+        for c in [&mut delayed, &mut exact] {
+            let v = c.step(y);
+            assert!((0.0..=10.0).contains(&v));
+        }
+    }
+    assert_eq!(exact.diagnostics(), Default::default());
+    let d = delayed.diagnostics();
+    assert_eq!(d.saturated, 0, "{d:?}");
+    assert!(d.loop_saturated > 10, "{d:?}");
+}

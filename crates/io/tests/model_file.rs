@@ -164,3 +164,40 @@ fn predict_runs_the_model_in_physical_units_from_zero_memory() {
             < 1e-9
     );
 }
+
+/// How many times `needle` occurs in `text`.
+fn occurrences(text: &str, needle: &str) -> usize {
+    text.matches(needle).count()
+}
+
+#[test]
+fn a_directory_or_a_missing_folder_is_refused_naming_the_path_once() {
+    let dir = tempfile::tempdir().unwrap();
+    // A directory where the model file should be.
+    let err = ModelFile::load(dir.path()).unwrap_err();
+    assert!(matches!(err, ModelFileError::Io { .. }), "{err:?}");
+    let text = err.to_string();
+    let shown = dir.path().display().to_string();
+    assert!(text.contains("is a directory"), "{text}");
+    assert_eq!(occurrences(&text, &shown), 1, "{text}");
+    // Saving into a folder that does not exist: the path once, the reason in plain words, and
+    // no temporary file name.
+    let file = ModelFile::load(&example("table1-plant.json")).unwrap();
+    let target = dir.path().join("missing").join("model.json");
+    let err = file.save(&target).unwrap_err();
+    let text = err.to_string();
+    assert_eq!(
+        occurrences(&text, &target.display().to_string()),
+        1,
+        "{text}"
+    );
+    assert!(text.contains("does not exist"), "{text}");
+    assert!(
+        !text.contains(".model.json.") && !text.contains("at path"),
+        "{text}"
+    );
+    // Saving over a directory.
+    let err = file.save(dir.path()).unwrap_err().to_string();
+    assert_eq!(occurrences(&err, &shown), 1, "{err}");
+    assert!(err.contains("directory"), "{err}");
+}

@@ -43,8 +43,9 @@ pub struct Args {
     /// was identified on). The compensator never leaves them.
     #[arg(long, value_name = "MIN:MAX", value_parser = parse_limits, allow_hyphen_values = true)]
     limits: Option<(f64, f64)>,
-    /// Exit with status 0 even when the trajectory leaves the reachable range (the drive is
-    /// clamped to the limits and the samples are counted either way).
+    /// Exit with status 0 even when the drive was clamped to its limits: because the trajectory
+    /// left the reachable range, or because a delayed loop lagged or rang (the samples are
+    /// counted either way, and the drive file is written).
     #[arg(long)]
     allow_saturation: bool,
 }
@@ -78,10 +79,27 @@ struct Report {
     limits: (f64, f64),
     control_unit: String,
     desired_unit: String,
-    /// Samples whose desired position could not be reached within the limits (clamped).
+    /// Samples whose drive was clamped to a limit, for either reason below
+    /// (`unreachable + loop_saturated`).
     saturated: u64,
-    /// Time (s) of the first saturated sample.
+    /// Samples whose desired position lay outside what the model can reach within the limits
+    /// from its state (DIHC: outside the inverse model's input range, or needing a drive
+    /// beyond the limits): the drive was clamped.
+    unreachable: u64,
+    /// Samples whose drive a delayed loop (ihc-delayed, wihc-delayed) pushed into a limit
+    /// although the desired position was reachable: the loop lagged or rang.
+    loop_saturated: u64,
+    /// Time (s) of the first clamped sample, either reason.
     first_saturated_time_s: Option<f64>,
+    /// Time (s) of the first unreachable desired position.
+    first_unreachable_time_s: Option<f64>,
+    /// Time (s) of the first loop saturation.
+    first_loop_saturated_time_s: Option<f64>,
+    /// wihc and wihc-delayed: the worst-case loop gain of the delayed WIHC over the limits
+    /// (at or above 1 the delayed loop can ring after a jump).
+    delayed_loop_gain: Option<f64>,
+    /// DIHC: the desired positions the inverse model accepts (it clamps into this range).
+    desired_range: Option<(f64, f64)>,
     /// Smallest and largest drive emitted.
     control_range: (f64, f64),
 }
@@ -105,16 +123,31 @@ pub fn run(args: &Args, ctx: Context) -> Result<(), CliError> {
     data::check_time_increasing(time)
         .map_err(|e| CliError::from(e).context(args.trajectory.display()))?;
 
+    if args.method == Method::WihcDelayed
+        && let Some(gain) = compensator.delayed_loop_gain().filter(|g| *g >= 1.0)
+    {
+        eprintln!(
+            "hystcomp: warning: the delayed WIHC's loop gain on this model is {gain:.3} (>= 1: \
+             max |3 a1 x^2 + b_1 + ... + b_k| / a2 over the drive limits), so after a jump in the \
+             desired position its drive can ring between the limits; --method wihc solves \
+             eq. (9) exactly and does not"
+        );
+    }
+
     let mut control = vec![0.0; desired.len()];
-    let mut first_saturated = None;
-    let mut saturated_so_far = 0;
+    let mut first_unreachable = None;
+    let mut first_loop = None;
+    let mut before = compensator.diagnostics();
     for (k, (&d, v)) in desired.iter().zip(control.iter_mut()).enumerate() {
         *v = compensator.step(d);
-        let saturated = compensator.diagnostics().saturated;
-        if saturated > saturated_so_far && first_saturated.is_none() {
-            first_saturated = Some(time[k]);
+        let after = compensator.diagnostics();
+        if after.saturated > before.saturated && first_unreachable.is_none() {
+            first_unreachable = Some(time[k]);
         }
-        saturated_so_far = saturated;
+        if after.loop_saturated > before.loop_saturated && first_loop.is_none() {
+            first_loop = Some(time[k]);
+        }
+        before = after;
     }
 
     let time_name = columns.names[0].clone();
@@ -127,6 +160,7 @@ pub fn run(args: &Args, ctx: Context) -> Result<(), CliError> {
     )
     .map_err(|e| CliError::output(e.to_string()))?;
 
+    let diagnostics = compensator.diagnostics();
     let report = Report {
         model: args.model.display().to_string(),
         method: args.method,
@@ -136,8 +170,17 @@ pub fn run(args: &Args, ctx: Context) -> Result<(), CliError> {
         limits: compensator.limits(),
         control_unit: compensator.control_unit().to_string(),
         desired_unit: compensator.desired_unit().to_string(),
-        saturated: compensator.diagnostics().saturated,
-        first_saturated_time_s: first_saturated,
+        saturated: diagnostics.saturated + diagnostics.loop_saturated,
+        unreachable: diagnostics.saturated,
+        loop_saturated: diagnostics.loop_saturated,
+        first_saturated_time_s: match (first_unreachable, first_loop) {
+            (Some(a), Some(b)) => Some(a.min(b)),
+            (a, b) => a.or(b),
+        },
+        first_unreachable_time_s: first_unreachable,
+        first_loop_saturated_time_s: first_loop,
+        delayed_loop_gain: compensator.delayed_loop_gain(),
+        desired_range: compensator.desired_range(),
         control_range: control
             .iter()
             .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), &v| {
@@ -161,28 +204,97 @@ pub fn run(args: &Args, ctx: Context) -> Result<(), CliError> {
             report.control_unit,
         );
     }
-    if report.saturated > 0 {
-        let message = format!(
-            "{} of {} desired positions lie outside what the model can reach within the drive \
-             limits {:.4} .. {:.4} {} (first at t = {} s); the drive was clamped to the limits there. \
-             Scale the trajectory into the stage's range or widen --limits{}",
-            report.saturated,
-            report.samples,
-            report.limits.0,
-            report.limits.1,
-            report.control_unit,
-            first_saturated.unwrap_or(f64::NAN),
-            if args.allow_saturation {
-                ""
-            } else {
-                "; --allow-saturation accepts the clamped output with exit status 0"
-            }
-        );
-        if args.allow_saturation {
-            eprintln!("hystcomp: warning: {message}");
-        } else {
-            return Err(CliError::with_code(message, EXIT_SATURATED));
-        }
+    let mut problems = Vec::new();
+    if report.unreachable > 0 {
+        problems.push(unreachable_message(&report, desired));
     }
-    Ok(())
+    if report.loop_saturated > 0 {
+        problems.push(loop_message(&report));
+    }
+    if problems.is_empty() {
+        return Ok(());
+    }
+    let mut message = problems.join(". Also, ");
+    if args.allow_saturation {
+        eprintln!("hystcomp: warning: {message}");
+        Ok(())
+    } else {
+        message.push_str(
+            "; --allow-saturation accepts the clamped output with exit status 0 (the drive file \
+             is written either way)",
+        );
+        Err(CliError::with_code(message, EXIT_SATURATED))
+    }
+}
+
+/// The message for desired positions out of the model's reach, per method.
+fn unreachable_message(report: &Report, desired: &[f64]) -> String {
+    let (v0, v1, volt) = (report.limits.0, report.limits.1, &report.control_unit);
+    let unit = &report.desired_unit;
+    let first = report.first_unreachable_time_s.unwrap_or(f64::NAN);
+    match report.desired_range {
+        Some((lo, hi)) => {
+            // DIHC: the desired position is clamped into the inverse model's input range, and
+            // then the drive into the limits.
+            let outside = desired
+                .iter()
+                .filter(|d| d.is_finite() && (**d < lo || **d > hi))
+                .count() as u64;
+            let beyond = report.unreachable.saturating_sub(outside);
+            let mut parts = Vec::new();
+            if outside > 0 {
+                parts.push(format!(
+                    "{outside} of {} desired positions lie outside the range {lo:.4} .. {hi:.4} \
+                     {unit} the inverse model was identified on, and DIHC clamped them into it",
+                    report.samples
+                ));
+            }
+            if beyond > 0 {
+                parts.push(format!(
+                    "{beyond} of {} desired positions need a drive beyond the limits {v0:.4} .. \
+                     {v1:.4} {volt}, and the drive was clamped to the limits there",
+                    report.samples
+                ));
+            }
+            format!(
+                "{} (first at t = {first} s). Scale the trajectory into that range, identify the \
+                 inverse model on a wider range, or widen --limits",
+                parts.join("; ")
+            )
+        }
+        None => format!(
+            "{} of {} desired positions lie outside what the model can reach within the drive \
+             limits {v0:.4} .. {v1:.4} {volt} (first at t = {first} s); the drive was clamped to \
+             the nearest limit there. Scale the trajectory into the stage's range or widen \
+             --limits",
+            report.unreachable, report.samples
+        ),
+    }
+}
+
+/// The message for a delayed loop that hit the limits although the positions were reachable.
+fn loop_message(report: &Report) -> String {
+    let exact = match report.method {
+        Method::IhcDelayed => "ihc",
+        _ => "wihc",
+    };
+    let gain = match report.delayed_loop_gain {
+        Some(g) if g >= 1.0 => format!(" (its loop gain on this model is {g:.3} >= 1)"),
+        Some(g) => format!(" (its loop gain on this model is {g:.3})"),
+        None => String::new(),
+    };
+    format!(
+        "on {} of {} samples the {} loop drove the output to the drive limits {:.4} .. {:.4} {} \
+         although the desired positions were within reach (first at t = {} s): the \
+         one-sample-delayed loop lagged or rang after a jump in the desired position{gain}. \
+         Use --method {exact}, which solves the law exactly each sample, or start the trajectory \
+         where the stage rests",
+        report.loop_saturated,
+        report.samples,
+        report.method,
+        report.limits.0,
+        report.limits.1,
+        report.control_unit,
+        report.first_loop_saturated_time_s.unwrap_or(f64::NAN),
+    )
 }
