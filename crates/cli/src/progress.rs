@@ -82,6 +82,11 @@ impl Drop for Bar {
 /// The bar follows a solver: iterations as steps, the best RMS error (in % of the output
 /// range, since the problem is normalised by it) as the message.
 impl hystcomp_identify::Observer for Bar {
+    fn begin(&mut self, label: &str) {
+        self.set_label(label);
+        self.set_position(0);
+    }
+
     fn observe(&mut self, progress: &hystcomp_identify::Progress) {
         self.set_length(progress.iterations as u64);
         self.set_position(progress.iteration as u64);

@@ -206,6 +206,113 @@ fn bad_test_files_are_refused_with_a_message_to_act_on() {
     assert!(message.contains("warm-up"), "{message}");
     let message = run(&["--test-warmup", "soon"]);
     assert!(message.contains("--test-warmup"), "{message}");
+    // Too few test samples after the test warm-up: the number needed, and what to change.
+    let message = run(&["--test-rows", "1..2"]);
+    assert!(message.contains("at least 39"), "{message}");
+    assert!(message.contains("--test-warmup"), "{message}");
+    let message = run(&["--test-rows", "1..40", "--test-warmup", "2"]);
+    assert!(message.contains("at least 39"), "{message}");
+    let message = run(&["--holdout", "-0.1"]);
+    assert!(
+        message.contains("holdout") && message.contains("-0.1"),
+        "{message}"
+    );
+    // Missing and empty files.
+    let missing = dir.path().join("missing.csv");
+    let empty = dir.path().join("empty.csv");
+    std::fs::write(&empty, "").unwrap();
+    for (train, test, fragments) in [
+        (&train, &missing, ["missing.csv", "check the path"]),
+        (&empty, &test, ["empty.csv", "no rows"]),
+    ] {
+        assert_fails(
+            &[
+                "crossval",
+                "--train",
+                s(train),
+                "--test",
+                s(test),
+                "--voltage-column",
+                "volts",
+                "--displacement-column",
+                "um",
+            ],
+            &fragments,
+        );
+    }
+    // The same column for both (in the training file).
+    assert_fails(
+        &[
+            "crossval",
+            "--train",
+            s(&train),
+            "--test",
+            s(&test),
+            "--voltage-column",
+            "volts",
+            "--displacement-column",
+            "volts",
+        ],
+        &["train.csv", "same values"],
+    );
+}
+
+/// Output paths that are an input or each other are refused before anything is written.
+#[test]
+fn saved_models_never_overwrite_a_record_or_each_other() {
+    let dir = tempfile::tempdir().unwrap();
+    let (train, test) = files(dir.path());
+    let before = (
+        std::fs::read(&train).unwrap(),
+        std::fs::read(&test).unwrap(),
+    );
+    let model = dir.path().join("model.json");
+    let base = [
+        "crossval",
+        "--train",
+        s(&train),
+        "--test",
+        s(&test),
+        "--voltage-column",
+        "volts",
+        "--displacement-column",
+        "um",
+    ];
+    for (extra, fragment) in [
+        (
+            vec!["--save-plant", s(&model), "--save-inverse", s(&model)],
+            "--save-plant and --save-inverse",
+        ),
+        (vec!["--save-plant", s(&train)], "same file as --train"),
+        (vec!["--save-inverse", s(&test)], "same file as --test"),
+    ] {
+        let out = hystcomp(&[&base[..], &extra[..]].concat());
+        assert_eq!(out.status.code(), Some(1), "{}", stderr(&out));
+        assert!(stderr(&out).contains(fragment), "{}", stderr(&out));
+        assert!(!model.exists());
+        assert_eq!(
+            (
+                std::fs::read(&train).unwrap(),
+                std::fs::read(&test).unwrap()
+            ),
+            before
+        );
+    }
+    // Two different paths: both written, each with its direction.
+    let inverse = dir.path().join("inverse.json");
+    let out = hystcomp(
+        &[
+            &base[..],
+            &["--save-plant", s(&model), "--save-inverse", s(&inverse)],
+        ]
+        .concat(),
+    );
+    assert!(out.status.success(), "{}", stderr(&out));
+    assert_eq!(ModelFile::load(&model).unwrap().direction, Direction::Plant);
+    assert_eq!(
+        ModelFile::load(&inverse).unwrap().direction,
+        Direction::Inverse
+    );
 }
 
 #[test]
@@ -213,7 +320,10 @@ fn dbo_records_cross_validate_within_sane_bounds() {
     let train = Path::new(DBO).join("Model_Vi_Do.dat");
     let test = Path::new(DBO).join("Test_Vi_Do_Di.dat");
     if !train.exists() || !test.exists() {
-        eprintln!("skipped: the DBO records are absent from {DBO}");
+        eprintln!(
+            "SKIPPED (checks nothing): the DBO records Model_Vi_Do.dat and Test_Vi_Do_Di.dat \
+             are absent from {DBO}"
+        );
         return;
     }
     let out = hystcomp(&[
@@ -238,7 +348,15 @@ fn dbo_records_cross_validate_within_sane_bounds() {
             fit["rms_percent"].as_f64().unwrap(),
             fit["max_percent"].as_f64().unwrap()
         );
-        assert!(fit["rms_percent"].as_f64().unwrap() < 1.5);
+        // About 1.5 times the measured figures (plant 0.681 / 2.511 %, inverse 0.470 /
+        // 1.826 %; the ranges are those of the fitted samples, warm-up excluded).
+        let (rms, max) = if model == "plant" {
+            (0.681, 2.511)
+        } else {
+            (0.470, 1.826)
+        };
+        assert!(fit["rms_percent"].as_f64().unwrap() < 1.5 * rms, "{fit}");
+        assert!(fit["max_percent"].as_f64().unwrap() < 1.5 * max, "{fit}");
     }
     let forward = &report["test"]["forward"];
     eprintln!(
@@ -246,20 +364,36 @@ fn dbo_records_cross_validate_within_sane_bounds() {
         forward["rms_percent"].as_f64().unwrap(),
         forward["max_percent"].as_f64().unwrap()
     );
-    assert!(forward["rms_percent"].as_f64().unwrap() < 5.0);
-    for r in report["test"]["replay"].as_array().unwrap() {
+    assert!(
+        forward["rms_percent"].as_f64().unwrap() < 1.5 * 2.627,
+        "{forward}"
+    );
+    assert!(
+        forward["max_percent"].as_f64().unwrap() < 1.5 * 7.515,
+        "{forward}"
+    );
+    // Measured replay (RMS, max) %: ihc 1.801 / 5.933, ihc-delayed 1.789 / 5.985, wihc 1.801 /
+    // 5.933, wihc-delayed 2.021 / 5.720, dihc 1.672 / 6.020.
+    let measured = [
+        [1.801, 5.933],
+        [1.789, 5.985],
+        [1.801, 5.933],
+        [2.021, 5.720],
+        [1.672, 6.020],
+    ];
+    assert_eq!(report["test"]["replay"].as_array().unwrap().len(), 5);
+    for (r, [m_rms, m_max]) in report["test"]["replay"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .zip(measured)
+    {
         let rms = r["error"]["rms_percent"].as_f64().unwrap();
         let max = r["error"]["max_percent"].as_f64().unwrap();
         eprintln!(
             "DBO crossval (cli): replay {} RMS {rms:.3} % max {max:.3} %",
             r["compensator"]
         );
-        // The delayed WIHC may ring while several operators move: a looser bound on its peak.
-        let max_bound = if r["compensator"] == "wihc-delayed" {
-            20.0
-        } else {
-            10.0
-        };
-        assert!(rms < 3.0 && max < max_bound, "{r}");
+        assert!(rms < 1.5 * m_rms && max < 1.5 * m_max, "{r}");
     }
 }

@@ -214,8 +214,15 @@ fn reads_a_matlab_level5_file_and_explains_v73() {
         "-o",
         s(&model_path),
     ]);
-    assert!(out.status.success(), "{}", stderr(&out));
-    assert!(ModelFile::load(&model_path).is_ok());
+    // The fixture's variables are exact linear functions of one counter (u = k/4 - 1,
+    // y = k/2 - 100): read, then refused as no hysteresis record (correlation 1).
+    assert_eq!(out.status.code(), Some(1), "{}", stderr(&out));
+    assert!(
+        stderr(&out).contains("exact linear function"),
+        "{}",
+        stderr(&out)
+    );
+    assert!(!model_path.exists());
 
     // A MATLAB v7.3 file is HDF5: a 512-byte text header, then the HDF5 signature.
     let v73 = dir.path().join("record.mat");
@@ -434,4 +441,316 @@ fn an_unwritable_model_path_is_an_output_error() {
     ]);
     assert_eq!(out.status.code(), Some(3), "{}", stderr(&out));
     assert!(stderr(&out).contains("m.json"));
+}
+
+/// Runs identify with `args` after `identify`, asserting exit status 1, no model written, and
+/// every fragment in the message; returns the message.
+fn refuses(model_path: &Path, args: &[&str], fragments: &[&str]) -> String {
+    let mut all = vec!["identify"];
+    all.extend_from_slice(args);
+    all.extend_from_slice(&["-o", s(model_path)]);
+    let out = hystcomp(&all);
+    assert_eq!(out.status.code(), Some(1), "{args:?}: {}", stderr(&out));
+    assert!(!model_path.exists(), "{args:?}: no model file is written");
+    let message = stderr(&out);
+    for fragment in fragments {
+        assert!(
+            message.contains(fragment),
+            "{args:?}: {fragment:?} not in: {message}"
+        );
+    }
+    assert!(!message.contains("panicked"), "{message}");
+    message
+}
+
+/// A headerless tab-separated record like the DBO files: time, voltage, displacement, a
+/// nearly constant column (a constant plus 1e-6 noise).
+fn tab_record(dir: &Path) -> PathBuf {
+    let (t, v, y) = record(3000);
+    let noise: Vec<f64> = (0..t.len())
+        .map(|k| 4.2 + 1e-6 * ((k * 7919) % 101) as f64 / 101.0)
+        .collect();
+    let path = dir.join("record.dat");
+    write_table(&path, None, &[&t, &v, &y, &noise], "\t");
+    path
+}
+
+/// Inputs whose fit cannot describe a piezo: the same column twice, a sign-flipped or
+/// nearly constant displacement, an output offset far off the data (unless accepted).
+#[test]
+fn fits_that_cannot_describe_a_piezo_are_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let data = tab_record(dir.path());
+    let d = s(&data);
+    let m = dir.path().join("m.json");
+    let cols = |v: &'static str, y: &'static str| {
+        [
+            "--data",
+            d,
+            "--voltage-column",
+            v,
+            "--displacement-column",
+            y,
+        ]
+    };
+
+    let mut args = cols("2", "2").to_vec();
+    refuses(
+        &m,
+        &args,
+        &["same values", "column 2", "--displacement-column"],
+    );
+    args.extend(["--displacement-factor", "15"]);
+    refuses(&m, &args, &["same values"]);
+    let mut args = cols("2", "3").to_vec();
+    args.extend(["--voltage-factor", "-1"]);
+    let message = refuses(
+        &m,
+        &args,
+        &["does not rise", "correlation", "sign", "factors"],
+    );
+    assert!(message.contains("-0.9"), "{message}");
+    refuses(
+        &m,
+        &cols("2", "4"),
+        &["does not rise", "correlation", "columns"],
+    );
+    let mut args = cols("2", "3").to_vec();
+    args.extend(["--offset", "-500"]);
+    refuses(&m, &args, &["RMS error", "--accept-poor-fit"]);
+    args.push("--accept-poor-fit");
+    let out = hystcomp(&[&["identify"], &args[..], &["-o", s(&m)]].concat());
+    assert!(out.status.success(), "{}", stderr(&out));
+    let model = ModelFile::load(&m).unwrap();
+    let rms = model.identification.unwrap()["fit"]["rms_percent"]
+        .as_f64()
+        .unwrap();
+    assert!(rms > 10.0, "{rms}");
+}
+
+/// Output paths that are an input file are refused, and the record is left as it was.
+#[test]
+fn the_model_never_overwrites_the_record() {
+    let dir = tempfile::tempdir().unwrap();
+    let data = tab_record(dir.path());
+    let before = std::fs::read(&data).unwrap();
+    let args = [
+        "--data",
+        s(&data),
+        "--voltage-column",
+        "2",
+        "--displacement-column",
+        "3",
+    ];
+    for output in [data.clone(), dir.path().join(".").join("record.dat")] {
+        let out = hystcomp(&[&["identify"], &args[..], &["-o", s(&output)]].concat());
+        assert_eq!(out.status.code(), Some(1), "{}", stderr(&out));
+        assert!(
+            stderr(&out).contains("same file as --data"),
+            "{}",
+            stderr(&out)
+        );
+        assert_eq!(
+            std::fs::read(&data).unwrap(),
+            before,
+            "the record is intact"
+        );
+    }
+}
+
+/// Bad files and columns: a missing column by index, a name in a headerless file, an empty
+/// file, a missing file, a repeated time value, a wrong delimiter, a truncated MAT-file.
+#[test]
+fn bad_files_and_columns_are_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let data = tab_record(dir.path());
+    let d = s(&data);
+    let m = dir.path().join("m.json");
+    refuses(
+        &m,
+        &[
+            "--data",
+            d,
+            "--voltage-column",
+            "2",
+            "--displacement-column",
+            "9",
+        ],
+        &["no column 9", "4 columns"],
+    );
+    refuses(
+        &m,
+        &[
+            "--data",
+            d,
+            "--voltage-column",
+            "voltage",
+            "--displacement-column",
+            "3",
+        ],
+        &["\"voltage\"", "no header", "by number"],
+    );
+    let message = refuses(
+        &m,
+        &[
+            "--data",
+            d,
+            "--voltage-column",
+            "2",
+            "--displacement-column",
+            "3",
+            "--delimiter",
+            "comma",
+        ],
+        &["1 column", "--delimiter"],
+    );
+    assert!(message.contains("record.dat"), "{message}");
+    let empty = dir.path().join("empty.dat");
+    std::fs::write(&empty, "").unwrap();
+    refuses(
+        &m,
+        &[
+            "--data",
+            s(&empty),
+            "--voltage-column",
+            "1",
+            "--displacement-column",
+            "2",
+        ],
+        &["empty.dat", "no rows"],
+    );
+    let missing = dir.path().join("missing.dat");
+    refuses(
+        &m,
+        &[
+            "--data",
+            s(&missing),
+            "--voltage-column",
+            "1",
+            "--displacement-column",
+            "2",
+        ],
+        &["missing.dat", "check the path"],
+    );
+    // A repeated time value in a headerless file: "time column 1", said once.
+    let (t, v, y) = record(600);
+    let mut t2 = t.clone();
+    t2[100] = t2[99];
+    let repeated = dir.path().join("repeated.dat");
+    write_table(&repeated, None, &[&t2, &v, &y], "\t");
+    let message = refuses(
+        &m,
+        &[
+            "--data",
+            s(&repeated),
+            "--voltage-column",
+            "2",
+            "--displacement-column",
+            "3",
+            "--time-column",
+            "1",
+        ],
+        &["time column 1", "not increasing"],
+    );
+    assert!(!message.contains("column column"), "{message}");
+    // A Level-5 MAT-file cut short.
+    let fixture = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../io/tests/fixtures/scipy_record.mat"
+    );
+    let bytes = std::fs::read(fixture).unwrap();
+    let cut = dir.path().join("cut.mat");
+    std::fs::write(&cut, &bytes[..300]).unwrap();
+    refuses(
+        &m,
+        &[
+            "--data",
+            s(&cut),
+            "--voltage-column",
+            "u",
+            "--displacement-column",
+            "y",
+        ],
+        &["cut.mat", "truncated"],
+    );
+}
+
+/// Options checked by the program, not by the argument parser, each named in its message.
+#[test]
+fn option_values_are_named_in_their_messages() {
+    let dir = tempfile::tempdir().unwrap();
+    let data = tab_record(dir.path());
+    let m = dir.path().join("m.json");
+    let base = [
+        "--data",
+        s(&data),
+        "--voltage-column",
+        "2",
+        "--displacement-column",
+        "3",
+    ];
+    let with = |extra: &[&'static str]| [&base[..], extra].concat();
+    refuses(
+        &m,
+        &with(&["--holdout", "-0.1"]),
+        &["holdout", "-0.1", "[0, 1)"],
+    );
+    refuses(
+        &m,
+        &with(&["--voltage-factor", "1e308"]),
+        &["--voltage-factor", "overflows"],
+    );
+    refuses(&m, &with(&["--max-condition", "1.5"]), &["limit 1.5)"]);
+    refuses(
+        &m,
+        &with(&["--method", "pso", "--bound", "0"]),
+        &["--bound 0", "positive"],
+    );
+    refuses(
+        &m,
+        &with(&["--method", "pso", "--offset-bound", "-1"]),
+        &["--offset-bound"],
+    );
+}
+
+/// `--thresholds` sets the model's thresholds (here r_i = (i - 0.5)/n, none at 0), and the
+/// text report counts the operators in good English.
+#[test]
+fn given_thresholds_are_used() {
+    let dir = tempfile::tempdir().unwrap();
+    let data = tab_record(dir.path());
+    let m = dir.path().join("m.json");
+    let base = [
+        "identify",
+        "--data",
+        s(&data),
+        "--voltage-column",
+        "2",
+        "--displacement-column",
+        "3",
+    ];
+    let out = hystcomp(
+        &[
+            &base[..],
+            &["--thresholds", "0.125,0.375,0.625,0.875", "-o", s(&m)],
+        ]
+        .concat(),
+    );
+    assert!(out.status.success(), "{}", stderr(&out));
+    let model = ModelFile::load(&m).unwrap();
+    assert_eq!(model.thresholds, [0.125, 0.375, 0.625, 0.875]);
+    assert!(
+        stdout(&out).contains("4 play operators"),
+        "{}",
+        stdout(&out)
+    );
+    let report = model.identification.unwrap();
+    assert!(report["fit"]["rms_percent"].as_f64().unwrap() < 5.0);
+    let out = hystcomp(&[&base[..], &["--thresholds", "0.5", "-o", s(&m)]].concat());
+    assert!(out.status.success(), "{}", stderr(&out));
+    assert!(
+        stdout(&out).contains("1 play operator,"),
+        "{}",
+        stdout(&out)
+    );
 }

@@ -8,12 +8,15 @@ use hystcomp_io::data::{Column, RowRange};
 use hystcomp_io::model_file::Direction;
 use serde::Serialize;
 
-use super::identify::{ColumnArgs, FitArgs, load, print_fit};
+use super::identify::{
+    CONSTRAINTS_HELP, ColumnArgs, FitArgs, check_distinct_paths, load, print_fit,
+};
 use crate::progress::Bar;
 use crate::{CliError, Context};
 
 /// Arguments of `hystcomp crossval`.
 #[derive(Debug, clap::Args)]
+#[command(after_help = CONSTRAINTS_HELP)]
 pub struct Args {
     /// Record to identify the models on (text or .mat; see `hystcomp identify --help`).
     #[arg(long, value_name = "FILE")]
@@ -46,7 +49,12 @@ pub struct Args {
     #[command(flatten)]
     pub fit: FitArgs,
     /// Fraction of the training record held out of the fit (reported in the fit summaries).
-    #[arg(long, default_value_t = 0.0, value_name = "FRACTION")]
+    #[arg(
+        long,
+        default_value_t = 0.0,
+        value_name = "FRACTION",
+        allow_hyphen_values = true
+    )]
     pub holdout: f64,
     /// Also write the plant model (for IHC and WIHC) to this file.
     #[arg(long, value_name = "MODEL.json")]
@@ -77,6 +85,17 @@ struct Output<'a> {
 
 /// Runs `hystcomp crossval`.
 pub fn run(args: &Args, ctx: Context) -> Result<(), CliError> {
+    let mut outputs: Vec<(&str, &std::path::Path)> = Vec::new();
+    if let Some(p) = &args.save_plant {
+        outputs.push(("--save-plant", p));
+    }
+    if let Some(p) = &args.save_inverse {
+        outputs.push(("--save-inverse", p));
+    }
+    check_distinct_paths(
+        &[("--train", &args.train), ("--test", &args.test)],
+        &outputs,
+    )?;
     let c = &args.columns;
     let train = load(
         &args.train,
@@ -114,7 +133,7 @@ pub fn run(args: &Args, ctx: Context) -> Result<(), CliError> {
         test_warmup,
     };
     let mut bar = if args.fit.iterates() {
-        Bar::new("identifying", args.fit.iterations as u64)
+        Bar::new("plant model", args.fit.iterations as u64)
     } else {
         Bar::hidden()
     };

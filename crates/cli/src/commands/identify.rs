@@ -129,9 +129,28 @@ pub struct FitArgs {
     /// pso: velocity clamp, a fraction of each parameter's search width.
     #[arg(long, default_value_t = 0.2, value_name = "FRACTION")]
     pub velocity_clamp: f64,
-    /// pso: search bound B: a1, a2 and every b_i in [-B, B] (normalised units).
-    #[arg(long, default_value_t = 3.0, value_name = "B")]
+    /// pso: search bound B: a1, a2 and every b_i in [-B, B] (normalised units: output range
+    /// per input range; Tables 1 and 2 of the paper lie within 1.3).
+    #[arg(
+        long,
+        default_value_t = 3.0,
+        allow_hyphen_values = true,
+        value_name = "B"
+    )]
     pub bound: f64,
+    /// pso: search bound C of the fitted output offset c (with --offset fit): c in [-C, C],
+    /// in output ranges (the offset is relative to the output's minimum, so 1 covers it).
+    #[arg(
+        long,
+        default_value_t = 1.0,
+        allow_hyphen_values = true,
+        value_name = "C"
+    )]
+    pub offset_bound: f64,
+    /// Write the model even when its RMS fit error exceeds 10 % of the output range (such a
+    /// fit is refused by default: the columns, factors or offset are probably wrong).
+    #[arg(long)]
+    pub accept_poor_fit: bool,
     /// pso: weight of the constraint violation added to the RMS error.
     #[arg(long, default_value_t = 10.0)]
     pub penalty: f64,
@@ -140,8 +159,19 @@ pub struct FitArgs {
     pub polish: bool,
 }
 
+/// The constraints of the fit, for `--help` of `identify` and `crossval`.
+pub const CONSTRAINTS_HELP: &str = "\
+Constraints of the fit (both solvers): the model is strictly increasing along every branch \
+(every branch slope >= --margin over the fitted input range), so that it is invertible. A plant \
+model must meet two more, beyond the paper: the play-operator part a2 + b_1 + ... + b_k >= \
+margin for every k, so that the analytic inverse of eq. (7) exists (IHC), and |3 a1 x^2 + b_1| \
+< a2 with margin over the range, so that the one-sample-delayed WIHC of eq. (9) converges. \
+Fits are refused when the displacement does not rise with the voltage (correlation below 0.5), \
+or when the RMS error exceeds 10 % of the output range (unless --accept-poor-fit).";
+
 /// Arguments of `hystcomp identify`.
 #[derive(Debug, clap::Args)]
+#[command(after_help = CONSTRAINTS_HELP)]
 pub struct Args {
     /// Measured record: delimited text (CSV, tab or whitespace separated, with or without a
     /// header) or a MATLAB Level-5 .mat file.
@@ -157,7 +187,12 @@ pub struct Args {
     pub fit: FitArgs,
     /// Fraction of the samples after the warm-up, at the end, held out of the fit and
     /// reported separately, in [0, 1).
-    #[arg(long, default_value_t = 0.2, value_name = "FRACTION")]
+    #[arg(
+        long,
+        default_value_t = 0.2,
+        value_name = "FRACTION",
+        allow_hyphen_values = true
+    )]
     pub holdout: f64,
     /// Where to write the model file (JSON, written atomically).
     #[arg(short, long, value_name = "MODEL.json")]
@@ -248,6 +283,30 @@ pub fn load(
     };
     let read = data::read_columns(path, &selection, &options)?;
     let names = read.names.clone();
+    if read.values[0] == read.values[1] {
+        return Err(CliError::input(format!(
+            "{}: the voltage column ({}) and the displacement column ({}) hold the same \
+             values: give two different columns (--voltage-column, --displacement-column)",
+            path.display(),
+            names[0],
+            names[1]
+        )));
+    }
+    for (what, column, factor) in [
+        ("--voltage-factor", &read.values[0], columns.voltage_factor),
+        (
+            "--displacement-factor",
+            &read.values[1],
+            columns.displacement_factor,
+        ),
+    ] {
+        if let Some(v) = column.iter().find(|v| !(*v * factor).is_finite()) {
+            return Err(CliError::input(format!(
+                "{what} {factor} is too large: {v} times it overflows; give a factor that \
+                 keeps the scaled values finite"
+            )));
+        }
+    }
     let mut values = read.values.into_iter();
     let voltage: Vec<f64> = values
         .next()
@@ -276,7 +335,12 @@ pub fn load(
     let time = values.next();
     if let Some(time) = &time {
         data::check_time_increasing(time).map_err(|e| {
-            CliError::from(e).context(format!("{}, time column {}", path.display(), names[2]))
+            let column = if names[2].starts_with("column ") {
+                names[2].clone()
+            } else {
+                format!("column \"{}\"", names[2])
+            };
+            CliError::from(e).context(format!("{}, time {column}", path.display()))
         })?;
     }
     Ok(Loaded {
@@ -316,12 +380,24 @@ impl FitArgs {
                         )));
                     }
                 }
-                let b = self.bound;
+                for (option, value) in [
+                    ("--bound", self.bound),
+                    ("--offset-bound", self.offset_bound),
+                ] {
+                    if !(value.is_finite() && value > 0.0) {
+                        return Err(CliError::input(format!(
+                            "{option} {value} is not usable: give a positive search bound in \
+                             normalised units (the defaults are 3 for --bound, 1 for \
+                             --offset-bound)"
+                        )));
+                    }
+                }
+                let (b, c) = (self.bound, self.offset_bound);
                 pso = pso.with_bounds(PsoBounds {
                     cubic: [-b, b],
                     linear: [-b, b],
                     weights: [-b, b],
-                    ..PsoBounds::default()
+                    offset: [-c, c],
                 })?;
                 Method::ParticleSwarm(pso)
             }
@@ -344,6 +420,11 @@ impl FitArgs {
             offset: self.offset,
             margin: self.margin,
             max_condition: self.max_condition,
+            max_fit_rms_percent: if self.accept_poor_fit {
+                None
+            } else {
+                Some(hystcomp_identify::DEFAULT_MAX_FIT_RMS_PERCENT)
+            },
             voltage_unit: columns.voltage_unit.clone(),
             displacement_unit: columns.displacement_unit.clone(),
         };
@@ -401,7 +482,8 @@ pub fn print_fit(report: &hystcomp_identify::FitReport) {
         s.total, s.warmup, s.fit, s.holdout
     );
     println!(
-        "  {} {} .. {} {} -> {} {} .. {} {} ({} operators, condition number {:.3e})",
+        "  {} {} .. {} {} -> {} {} .. {} {} (fitted ranges; {} play operator{}, condition \
+         number {:.3e})",
         report.input.quantity,
         report.input.min,
         report.input.max,
@@ -411,6 +493,11 @@ pub fn print_fit(report: &hystcomp_identify::FitReport) {
         report.output.max,
         unit,
         report.thresholds.len(),
+        if report.thresholds.len() == 1 {
+            ""
+        } else {
+            "s"
+        },
         report.condition_number
     );
     println!(
@@ -436,8 +523,55 @@ pub fn print_fit(report: &hystcomp_identify::FitReport) {
     );
 }
 
+/// The path as the file system resolves it: canonical when the file exists, else its
+/// directory canonical (when that exists) joined with its name.
+fn resolved(path: &Path) -> PathBuf {
+    if let Ok(p) = path.canonicalize() {
+        return p;
+    }
+    let absolute = std::path::absolute(path).unwrap_or_else(|_| path.to_owned());
+    match (absolute.parent(), absolute.file_name()) {
+        (Some(dir), Some(name)) => dir
+            .canonicalize()
+            .map(|d| d.join(name))
+            .unwrap_or_else(|_| absolute.clone()),
+        _ => absolute,
+    }
+}
+
+/// Refuses output paths that are the same file as an input or as another output (so that
+/// writing a model never destroys a measured record or another result).
+pub fn check_distinct_paths(
+    inputs: &[(&str, &Path)],
+    outputs: &[(&str, &Path)],
+) -> Result<(), CliError> {
+    for (k, (output, out_path)) in outputs.iter().enumerate() {
+        let out = resolved(out_path);
+        for (input, in_path) in inputs {
+            if resolved(in_path) == out {
+                return Err(CliError::input(format!(
+                    "{output} {} is the same file as {input}: writing the model there would \
+                     destroy the record; give another output path",
+                    out_path.display()
+                )));
+            }
+        }
+        for (other, other_path) in &outputs[..k] {
+            if resolved(other_path) == out {
+                return Err(CliError::input(format!(
+                    "{other} and {output} are the same file ({}): one model would overwrite \
+                     the other; give two different paths",
+                    out_path.display()
+                )));
+            }
+        }
+    }
+    Ok(())
+}
+
 /// Runs `hystcomp identify`.
 pub fn run(args: &Args, ctx: Context) -> Result<(), CliError> {
+    check_distinct_paths(&[("--data", &args.data)], &[("--output", &args.output)])?;
     let c = &args.columns;
     let loaded = load(
         &args.data,
