@@ -280,6 +280,11 @@ pub struct MechanicsConfig {
     pub resonance_hz: f64,
     /// Damping ratio, > 0 (up to 10). Default 0.05.
     pub damping_ratio: f64,
+    /// `true` makes the stage rigid: the true position is the stack's free displacement at the
+    /// end of each sample, with no resonance (`resonance_hz` and `damping_ratio` are then
+    /// unused). Default `false`. Not a physical stage: for ablation studies (the study's
+    /// "dynamics off" run) that ask what the resonance costs.
+    pub rigid: bool,
 }
 
 impl Default for MechanicsConfig {
@@ -287,6 +292,7 @@ impl Default for MechanicsConfig {
         MechanicsConfig {
             resonance_hz: 800.0,
             damping_ratio: 0.05,
+            rigid: false,
         }
     }
 }
@@ -420,6 +426,26 @@ impl StageConfig {
         positive("amplifier.bandwidth_hz", a.bandwidth_hz)?;
         positive("amplifier.peak_current_ma", a.peak_current_ma)?;
         positive("amplifier.load_capacitance_uf", a.load_capacitance_uf)?;
+        // The full-scale command (`output_max_v / gain`) must be one the DAC can write:
+        // otherwise the upper rail, and the stroke the study and the compensators assume, is
+        // never reached.
+        if self.dac.max_v * a.gain < a.output_max_v * (1.0 - 1e-9) {
+            return Err(StageError::invalid(
+                "amplifier.gain",
+                format!(
+                    "at least amplifier.output_max_v / dac.max_v = {} / {} = {} so that the \
+                     DAC's full command reaches the amplifier's upper rail (dac.max_v * gain = \
+                     {} V < {} V); raise amplifier.gain or dac.max_v, or lower \
+                     amplifier.output_max_v",
+                    a.output_max_v,
+                    self.dac.max_v,
+                    a.output_max_v / self.dac.max_v,
+                    self.dac.max_v * a.gain,
+                    a.output_max_v
+                ),
+                a.gain,
+            ));
+        }
 
         self.hysteresis.preisach.validate()?;
         self.hysteresis.bouc_wen.validate()?;

@@ -22,6 +22,15 @@ pub enum StageError {
         /// The value found, as written back.
         value: String,
     },
+    /// A file named in the stage file (`field`) could not be read or is not usable.
+    FieldFile {
+        /// Dotted path of the field that names the file, e.g. `hysteresis.mpim.model_file`.
+        field: &'static str,
+        /// The file.
+        path: PathBuf,
+        /// What went wrong.
+        message: String,
+    },
     /// The stage file could not be read.
     Io {
         /// The file.
@@ -44,10 +53,11 @@ impl StageError {
         }
     }
 
-    /// The dotted field path of an [`StageError::Invalid`] error, `None` otherwise.
+    /// The dotted field path of an [`StageError::Invalid`] or [`StageError::FieldFile`]
+    /// error, `None` otherwise.
     pub fn field(&self) -> Option<&'static str> {
         match self {
-            StageError::Invalid { field, .. } => Some(field),
+            StageError::Invalid { field, .. } | StageError::FieldFile { field, .. } => Some(field),
             _ => None,
         }
     }
@@ -68,6 +78,15 @@ impl fmt::Display for StageError {
                 requirement,
                 value,
             } => write!(f, "{field} must be {requirement}, got {value}"),
+            StageError::FieldFile {
+                field,
+                path,
+                message,
+            } => write!(
+                f,
+                "{field}: cannot use the file {}: {message}",
+                path.display()
+            ),
             StageError::Io { path, message } => {
                 write!(
                     f,

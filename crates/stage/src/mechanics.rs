@@ -56,6 +56,14 @@ pub(crate) fn expm3(m: &M3) -> M3 {
 
 impl Mechanics {
     pub(crate) fn new(config: &MechanicsConfig, period_s: f64) -> Self {
+        if config.rigid {
+            // x[k+1] = u[k]: the position follows the free displacement, no resonance.
+            return Mechanics {
+                phi: [[0.0, 0.0], [0.0, 0.0]],
+                gamma: [1.0, 0.0],
+                state: [0.0, 0.0],
+            };
+        }
         let w = 2.0 * std::f64::consts::PI * config.resonance_hz;
         let z = config.damping_ratio;
         let t = period_s;
@@ -99,6 +107,7 @@ mod tests {
                 &MechanicsConfig {
                     resonance_hz: f,
                     damping_ratio: z,
+                    rigid: false,
                 },
                 1e-4,
             );

@@ -43,6 +43,9 @@ pub struct ClampCounts {
     pub amplifier_clamped: u64,
     /// NaN or infinite commands (the DAC held its previous value).
     pub non_finite: u64,
+    /// Sensor readings outside the ADC's span (the measured position saturated at the end of
+    /// the span: `adc.min_v / sensitivity` or `adc.max_v / sensitivity` um).
+    pub adc_clamped: u64,
 }
 
 /// The response of a whole-signal run (python-control style): one entry per command sample.
@@ -230,7 +233,8 @@ impl Stage {
         if let Some(noise) = &self.noise {
             reading_um += noise.sample(&mut self.rng);
         }
-        let (adc_v, _) = self.adc.quantise(reading_um * self.sensitivity_v_per_um);
+        let (adc_v, clamped) = self.adc.quantise(reading_um * self.sensitivity_v_per_um);
+        self.clamps.adc_clamped += u64::from(clamped);
         adc_v / self.sensitivity_v_per_um
     }
 
@@ -259,6 +263,7 @@ impl Stage {
             dac_clamped: self.clamps.dac_clamped - before.dac_clamped,
             amplifier_clamped: self.clamps.amplifier_clamped - before.amplifier_clamped,
             non_finite: self.clamps.non_finite - before.non_finite,
+            adc_clamped: self.clamps.adc_clamped - before.adc_clamped,
         };
         response
     }

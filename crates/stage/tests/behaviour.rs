@@ -425,9 +425,54 @@ fn wild_commands_are_clamped_counted_and_stay_finite() {
         .count() as u64;
     assert_eq!(r.clamps.dac_clamped, outside_dac);
     assert_eq!(r.clamps.amplifier_clamped, outside_amp);
+    // The sensor's 100 um span holds the whole stroke: the ADC never saturates.
+    assert_eq!(r.clamps.adc_clamped, 0);
     assert!(r.amplifier_v.iter().all(|v| (0.0..=150.0).contains(v)));
     assert!(r.true_position_um.iter().all(|x| x.is_finite()));
     assert!(r.measured_position_um.iter().all(|x| x.is_finite()));
+}
+
+#[test]
+fn a_rigid_stage_has_no_resonance() {
+    let mut config = StageConfig::default();
+    config.mechanics.rigid = true;
+    let mut rigid = Stage::new(&config, 1).unwrap();
+    let mut flexible = Stage::new(&StageConfig::default(), 1).unwrap();
+    let mut rang = false;
+    for k in 0..2_000 {
+        let command = if k < 10 { 0.0 } else { 5.0 };
+        let r = rigid.step_detailed(command);
+        assert_eq!(r.true_position_um, r.free_position_um, "sample {k}");
+        let f = flexible.step_detailed(command);
+        rang |= (f.true_position_um - f.free_position_um).abs() > 0.1;
+    }
+    assert!(
+        rang,
+        "the default stage rings after a step; the rigid one must not"
+    );
+}
+
+#[test]
+fn an_adc_span_below_the_stroke_saturates_the_reading_and_is_counted() {
+    // 5 V at 0.1 V/um: the ADC reads at most 50 um of the 75 um stroke.
+    let mut config = StageConfig::default();
+    config.adc.max_v = 5.0;
+    config.sensor.noise_rms_nm = 0.0;
+    let ramp: Vec<f64> = (0..20_000).map(|k| 10.0 * k as f64 / 19_999.0).collect();
+    let r = simulate(&config, 1, &ramp).unwrap();
+    let above = r
+        .true_position_um
+        .iter()
+        .filter(|&&x| x * 0.1 > 5.0)
+        .count() as u64;
+    assert!(above > 1000, "the ramp should pass 50 um: {above}");
+    assert_eq!(r.clamps.adc_clamped, above);
+    let top = r
+        .measured_position_um
+        .iter()
+        .copied()
+        .fold(f64::MIN, f64::max);
+    assert!(top < 50.0 && top > 49.9, "saturated reading {top}");
 }
 
 #[test]

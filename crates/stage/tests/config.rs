@@ -90,6 +90,17 @@ const BAD_FILES: &[(&str, &str, &str)] = &[
         "> 0",
     ),
     ("[amplifier]\ngain = 0.0", "amplifier.gain", "> 0"),
+    // The DAC's full command (10 V) times the gain (5) gives 50 V: never the 150 V rail.
+    (
+        "[amplifier]\ngain = 5.0",
+        "amplifier.gain",
+        "so that the DAC's full command reaches the amplifier's upper rail (dac.max_v * gain = 50 V < 150 V)",
+    ),
+    (
+        "[dac]\nmax_v = 5.0",
+        "amplifier.gain",
+        "amplifier.output_max_v / dac.max_v = 150 / 5 = 30",
+    ),
     (
         "[amplifier]\noutput_min_v = 150.0\noutput_max_v = 0.0",
         "amplifier.output_min_v..amplifier.output_max_v",

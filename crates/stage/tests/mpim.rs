@@ -86,8 +86,15 @@ fn an_mpim_stage_needs_a_readable_plant_model_file() {
         "[hysteresis]\nmodel = \"mpim\"\n[hysteresis.mpim]\nmodel_file = \"/no/such/model.json\"\n",
     )
     .unwrap();
-    let err = Stage::new(&config, 0).unwrap_err().to_string();
+    let err = Stage::new(&config, 0).unwrap_err();
+    assert_eq!(err.field(), Some("hysteresis.mpim.model_file"));
+    let err = err.to_string();
     assert!(err.contains("/no/such/model.json"), "{err}");
+    assert!(err.contains("hysteresis.mpim.model_file"), "{err}");
+    assert!(
+        !err.contains("stage file"),
+        "not the stage file that is missing: {err}"
+    );
     let inverse =
         PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../models/table2-inverse.json");
     let config = StageConfig::from_toml_str(&format!(

@@ -22,7 +22,8 @@ impl MpimHysteresis {
     /// Loads the model file at `path`; `amplifier_gain` converts the amplifier voltage back
     /// into the command voltage the model takes.
     pub fn new(path: &std::path::Path, amplifier_gain: f64) -> Result<Self, StageError> {
-        let file = ModelFile::load(path).map_err(|e| StageError::Io {
+        let file = ModelFile::load(path).map_err(|e| StageError::FieldFile {
+            field: "hysteresis.mpim.model_file",
             path: path.to_path_buf(),
             message: e.to_string(),
         })?;
@@ -33,7 +34,8 @@ impl MpimHysteresis {
                 path.display(),
             ));
         }
-        let model = file.model().map_err(|e| StageError::Io {
+        let model = file.model().map_err(|e| StageError::FieldFile {
+            field: "hysteresis.mpim.model_file",
             path: path.to_path_buf(),
             message: e.to_string(),
         })?;
