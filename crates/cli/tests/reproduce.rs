@@ -34,8 +34,17 @@ fn reproduce_prints_table3_writes_the_report_and_honours_json() {
     for p in pipelines {
         assert_eq!(p["runs"].as_array().unwrap().len(), 3);
     }
-    let published = json["published"]["ihc"]["e_rms"].as_f64().unwrap();
+    // The paper's numbers carry the same `_percent` keys as ours.
+    let published = json["published"]["ihc"]["e_rms_percent"].as_f64().unwrap();
     assert_eq!(published, 0.75);
+    assert_eq!(json["published"]["uncompensated_e_mhe_percent"], 13.0);
+    // The noise floor and the ablations are in --json.
+    assert_eq!(json["noise_floor"]["seeds"].as_array().unwrap().len(), 5);
+    let ablations = json["ablations"].as_array().unwrap();
+    assert_eq!(ablations[0]["label"], "baseline");
+    assert_eq!(ablations.len(), 5);
+    assert!(ablations[1]["ihc"]["e_rms_percent"].as_f64().unwrap() > 0.0);
+    assert!(json["informational"].as_array().unwrap().len() == 6);
     // The same numbers as the study file beside the report.
     let file: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(out.join("study.json")).unwrap()).unwrap();
@@ -69,12 +78,64 @@ fn reproduce_runs_on_a_stage_file_and_refuses_a_bad_one() {
     let o = hystcomp(&["reproduce", "--stage", s(&stage), "--out", s(&out)]);
     assert!(!o.status.success());
     assert!(stderr(&o).contains("damping_ratio"), "{}", stderr(&o));
+    // A bad value names the file it is in.
+    assert!(stderr(&o).contains(s(&stage)), "{}", stderr(&o));
     let o = hystcomp(&["reproduce", "--stage", "/no/such/stage.toml"]);
     assert!(!o.status.success());
     assert!(stderr(&o).contains("/no/such/stage.toml"), "{}", stderr(&o));
     let o = hystcomp(&["reproduce", "--periods", "1", "--out", s(&out)]);
     assert!(!o.status.success());
-    assert!(stderr(&o).contains("at least 2 periods"), "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains("give 2 to 20 periods"),
+        "{}",
+        stderr(&o)
+    );
+}
+
+#[test]
+fn reproduce_refuses_options_it_cannot_run_without_aborting() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("r");
+    let out = s(&out);
+    // Each of these used to abort on a failed allocation or run for minutes.
+    assert_fails(
+        &["reproduce", "--out", out, "--periods", "100000"],
+        &["--periods 100000", "give 2 to 20 periods"],
+    );
+    assert_fails(
+        &["reproduce", "--out", out, "--pso-iterations", "0"],
+        &["--pso-iterations 0", "the study's default is 2000"],
+    );
+    assert_fails(
+        &["reproduce", "--out", out, "--pso-particles", "100000000000"],
+        &["--pso-particles 100000000000", "2 to 1000"],
+    );
+    // A stage that cannot reach the trajectory: 30 um of stroke for a 0-70 um trajectory.
+    let stage = dir.path().join("short.toml");
+    std::fs::write(&stage, "[hysteresis.preisach]\nstroke_um = 30.0\n").unwrap();
+    assert_fails(
+        &["reproduce", "--out", out, "--stage", s(&stage)],
+        &[
+            "cannot reach the trajectory",
+            "hysteresis.preisach.stroke_um",
+        ],
+    );
+    // A sensor whose span is below the trajectory: the measured position would saturate.
+    std::fs::write(&stage, "[adc]\nmax_v = 5.0\n").unwrap();
+    assert_fails(
+        &["reproduce", "--out", out, "--stage", s(&stage)],
+        &["adc.max_v", "sensor.sensitivity_v_per_um"],
+    );
+    // A model file that is missing names the field, not the stage file.
+    std::fs::write(
+        &stage,
+        "[hysteresis]\nmodel = \"mpim\"\n[hysteresis.mpim]\nmodel_file = \"nope.json\"\n",
+    )
+    .unwrap();
+    assert_fails(
+        &["reproduce", "--out", out, "--stage", s(&stage)],
+        &["hysteresis.mpim.model_file", "nope.json"],
+    );
 }
 
 #[test]
@@ -199,6 +260,129 @@ fn evaluate_computes_the_three_indices_and_refuses_bad_records() {
         ],
         "bin",
     );
+    // Too many bins: refused (not an allocation abort, not a silently low e_mhe).
+    for bins in ["100000000000000", "100000", "201"] {
+        fails(
+            &[
+                "evaluate",
+                "--desired",
+                s(&file),
+                "--measured",
+                s(&file),
+                "--bins",
+                bins,
+            ],
+            "bins",
+        );
+    }
+    fails(
+        &[
+            "evaluate",
+            "--desired",
+            s(&file),
+            "--measured",
+            s(&file),
+            "--bins",
+            "201",
+        ],
+        "2000 samples support at most 200 e_mhe bins",
+    );
+    let o = hystcomp(&[
+        "evaluate",
+        "--desired",
+        s(&file),
+        "--measured",
+        s(&file),
+        "--measured-column",
+        "y",
+        "--bins",
+        "200",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+}
+
+#[test]
+fn evaluate_reads_simulate_output_by_default_and_checks_times_on_request() {
+    let dir = tempfile::tempdir().unwrap();
+    let n = 2000;
+    let time: Vec<f64> = (0..n).map(|k| k as f64 * 1e-4).collect();
+    let desired: Vec<f64> = (0..n).map(|k| (k as f64 * 1e-3).sin() * 10.0).collect();
+    let off: Vec<f64> = desired.iter().map(|d| d + 0.5).collect();
+    let desired_file = dir.path().join("desired.csv");
+    hystcomp_io::data::write_csv(&desired_file, &["time_s", "y_d"], &[&time, &desired]).unwrap();
+    // Like a simulate output: measured_position_um is column 5, column 2 is something else.
+    let stage_file = dir.path().join("stage.csv");
+    let zeros = vec![0.0; n];
+    hystcomp_io::data::write_csv(
+        &stage_file,
+        &[
+            "time_s",
+            "command_v",
+            "amplifier_v",
+            "true_position_um",
+            "measured_position_um",
+        ],
+        &[&time, &zeros, &zeros, &desired, &off],
+    )
+    .unwrap();
+    let o = hystcomp(&[
+        "evaluate",
+        "--desired",
+        s(&desired_file),
+        "--measured",
+        s(&stage_file),
+        "--time-column",
+        "time_s",
+        "--json",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let json: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert_eq!(json["measured_column"], "measured_position_um");
+    let range = desired.iter().copied().fold(f64::MIN, f64::max)
+        - desired.iter().copied().fold(f64::MAX, f64::min);
+    let e_m = json["e_m_percent"].as_f64().unwrap();
+    assert!((e_m - 0.5 / range * 100.0).abs() < 1e-9, "{json}");
+    // A file without that column: column 2, as before.
+    let o = hystcomp(&[
+        "evaluate",
+        "--desired",
+        s(&desired_file),
+        "--measured",
+        s(&desired_file),
+        "--json",
+    ]);
+    let json: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert_eq!(json["measured_column"], "y_d");
+    assert_eq!(json["e_m_percent"].as_f64().unwrap(), 0.0);
+    // Shifted by one sample in time: refused with the row and both times.
+    let shifted: Vec<f64> = time.iter().map(|t| t + 1e-4).collect();
+    hystcomp_io::data::write_csv(
+        &stage_file,
+        &["time_s", "measured_position_um"],
+        &[&shifted, &off],
+    )
+    .unwrap();
+    assert_fails(
+        &[
+            "evaluate",
+            "--desired",
+            s(&desired_file),
+            "--measured",
+            s(&stage_file),
+            "--time-column",
+            "time_s",
+        ],
+        &["the times differ at sample 1", "same time axis"],
+    );
+    // Without --time-column the pair is taken row by row, as documented.
+    let o = hystcomp(&[
+        "evaluate",
+        "--desired",
+        s(&desired_file),
+        "--measured",
+        s(&stage_file),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
 }
 
 /// The README's command-line chain: a model from `reproduce`, `compensate` the paper's

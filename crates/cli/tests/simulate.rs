@@ -155,6 +155,89 @@ fn stage_file_and_named_columns_are_used() {
     assert_eq!(summary["sample_rate_hz"], 5000.0);
     assert_eq!(summary["clamped"]["dac"], 10);
     assert_eq!(summary["clamped"]["amplifier"], 5);
+    assert_eq!(summary["clamped"]["adc"], 0);
+}
+
+#[test]
+fn adc_saturation_is_counted_and_warned() {
+    let dir = tempfile::tempdir().unwrap();
+    let input = dir.path().join("volts.csv");
+    let output = dir.path().join("out.csv");
+    let stage = dir.path().join("stage.toml");
+    // The sine reaches 9 V (about 67 um); an ADC span of 0..3 V at 0.1 V/um reads 30 um at most.
+    write_input(&input, 1e4, 5000);
+    std::fs::write(
+        &stage,
+        "[adc]
+min_v = -3.0
+max_v = 3.0
+",
+    )
+    .unwrap();
+    let args = [
+        "simulate",
+        "--stage",
+        s(&stage),
+        "--input",
+        s(&input),
+        "-o",
+        s(&output),
+    ];
+    let out = hystcomp(&args);
+    assert!(out.status.success(), "{}", stderr(&out));
+    assert!(
+        stderr(&out).contains("outside the ADC's span") && stderr(&out).contains("adc.max_v"),
+        "{}",
+        stderr(&out)
+    );
+    let (_, rows) = read_output(&output);
+    let saturated = rows.iter().filter(|r| r[3] * 0.1 > 3.0).count() as u64;
+    assert!(saturated > 100, "{saturated}");
+    let mut json_args = vec!["--json"];
+    json_args.extend(args);
+    let out = hystcomp(&json_args);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let summary: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    // Noise can push a reading near the top across the edge either way: within a few samples.
+    let counted = summary["clamped"]["adc"].as_u64().unwrap();
+    assert!(
+        counted.abs_diff(saturated) <= 20,
+        "{counted} vs {saturated}"
+    );
+    let top = rows.iter().map(|r| r[4]).fold(f64::MIN, f64::max);
+    assert!(top < 30.0, "measured {top}");
+}
+
+#[test]
+fn a_gain_that_never_reaches_the_rail_is_refused_with_both_fields_and_the_file() {
+    let dir = tempfile::tempdir().unwrap();
+    let input = dir.path().join("volts.csv");
+    let stage = dir.path().join("weak.toml");
+    write_input(&input, 1e4, 100);
+    std::fs::write(
+        &stage,
+        "[amplifier]
+gain = 5.0
+",
+    )
+    .unwrap();
+    assert_fails(
+        &[
+            "simulate",
+            "--stage",
+            s(&stage),
+            "--input",
+            s(&input),
+            "-o",
+            s(&dir.path().join("out.csv")),
+        ],
+        &[
+            "weak.toml",
+            "amplifier.gain",
+            "amplifier.output_max_v",
+            "dac.max_v",
+        ],
+    );
 }
 
 #[test]

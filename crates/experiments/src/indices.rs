@@ -10,19 +10,47 @@ use core::fmt;
 /// perfectly single-valued map; the report states the bin count beside every e_mhe figure.
 pub const DEFAULT_MHE_BINS: usize = 100;
 
+/// The fewest samples per e_mhe bin, on average, that `hystcomp evaluate` and the study
+/// accept: with fewer, many bins hold one sample or none and e_mhe (the widest spread
+/// inside a bin) underestimates the loop. [`e_mhe_percent`] itself only refuses more bins
+/// than samples.
+pub const MIN_SAMPLES_PER_BIN: usize = 10;
+
+/// The most e_mhe bins `samples` samples support at [`MIN_SAMPLES_PER_BIN`] per bin.
+pub fn max_mhe_bins(samples: usize) -> usize {
+    samples / MIN_SAMPLES_PER_BIN
+}
+
 /// Why the indices of a pair of records could not be computed.
 #[derive(Debug, Clone, PartialEq)]
 pub enum IndexError {
     /// The two records have different lengths.
-    LengthMismatch { desired: usize, measured: usize },
+    LengthMismatch {
+        /// Samples in the desired record.
+        desired: usize,
+        /// Samples in the measured record.
+        measured: usize,
+    },
     /// Fewer than two samples.
     TooFewSamples(usize),
     /// A sample is NaN or infinite.
-    NonFinite { record: &'static str, index: usize },
+    NonFinite {
+        /// `desired` or `measured`.
+        record: &'static str,
+        /// The sample, 0-based.
+        index: usize,
+    },
     /// `max y_d - min y_d` is zero, so no percentage can be formed.
     ConstantDesired,
     /// Fewer than one bin asked for.
     NoBins,
+    /// More bins than samples.
+    TooManyBins {
+        /// Bins asked for.
+        bins: usize,
+        /// Samples in the records.
+        samples: usize,
+    },
 }
 
 impl fmt::Display for IndexError {
@@ -46,6 +74,14 @@ impl fmt::Display for IndexError {
                  (percent of the desired range) are undefined"
             ),
             IndexError::NoBins => write!(f, "e_mhe needs at least one bin"),
+            IndexError::TooManyBins { bins, samples } => write!(
+                f,
+                "{bins} e_mhe bins for {samples} samples: most bins would hold one sample or \
+                 none and e_mhe would be meaningless; use at most {} bins ({} samples per bin \
+                 on average)",
+                max_mhe_bins(*samples).max(1),
+                MIN_SAMPLES_PER_BIN
+            ),
         }
     }
 }
@@ -133,6 +169,12 @@ pub fn e_mhe_percent(desired: &[f64], measured: &[f64], bins: usize) -> Result<f
         return Err(IndexError::NoBins);
     }
     let (lo, hi) = desired_range(desired, measured)?;
+    if bins > desired.len() {
+        return Err(IndexError::TooManyBins {
+            bins,
+            samples: desired.len(),
+        });
+    }
     let mut low = vec![f64::INFINITY; bins];
     let mut high = vec![f64::NEG_INFINITY; bins];
     let mut count = vec![0usize; bins];
@@ -214,5 +256,16 @@ mod tests {
             Err(IndexError::TooFewSamples(1))
         );
         assert_eq!(e_mhe_percent(&d, &d, 0), Err(IndexError::NoBins));
+        // More bins than samples: refused, not a huge allocation or a silently wrong e_mhe.
+        let err = e_mhe_percent(&d, &d, 100_000_000_000_000).unwrap_err();
+        assert_eq!(
+            err,
+            IndexError::TooManyBins {
+                bins: 100_000_000_000_000,
+                samples: 10
+            }
+        );
+        assert!(err.to_string().contains("use at most 1 bins"), "{err}");
+        assert_eq!(max_mhe_bins(1000), 100);
     }
 }

@@ -61,11 +61,19 @@ pub struct ReferenceMpim {
     pub a2: f64,
 }
 
-/// One column of Table 3, percent.
+/// One column of Table 3, percent. Read from `reference.toml` as `e_mhe`, `e_m`, `e_rms`;
+/// written (JSON) as `e_mhe_percent`, `e_m_percent`, `e_rms_percent`, the key names of our
+/// own [`crate::TrackingIndices`].
 #[derive(Debug, Clone, Copy, Deserialize, serde::Serialize, PartialEq)]
 pub struct ReferenceIndices {
+    /// Maximum hysteresis error, eq. (12), % of the `y_d` range.
+    #[serde(rename(serialize = "e_mhe_percent"))]
     pub e_mhe: f64,
+    /// Maximum tracking error, (D1), % of the `y_d` range.
+    #[serde(rename(serialize = "e_m_percent"))]
     pub e_m: f64,
+    /// RMS tracking error, (D2), % of the `y_d` range.
+    #[serde(rename(serialize = "e_rms_percent"))]
     pub e_rms: f64,
 }
 

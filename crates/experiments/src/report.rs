@@ -257,6 +257,10 @@ pub struct AcceptanceBound {
     pub max_percent: Option<f64>,
     /// Where the bound comes from, e.g. `"issue #1: the paper's e_mhe"`.
     pub source: String,
+    /// `true` for a check shown (pass or fail) but not counted in the acceptance verdict,
+    /// e.g. the `paper` pipeline against the bounds the `exact` one must meet.
+    #[serde(default)]
+    pub informational: bool,
 }
 
 /// A figure beside `index.html`.
@@ -266,7 +270,8 @@ pub struct FigureEntry {
     pub png_file: String,
     /// File name of its SVG twin in the same directory, if any (linked from the caption).
     pub svg_file: Option<String>,
-    /// The paper's equivalent figure, e.g. `"Fig. 7"` or `"Fig. 8 (a)-(c)"`.
+    /// The paper's equivalent figure, e.g. `"Fig. 7"` or `"Fig. 8 (a)-(c)"`; empty when the
+    /// paper has none.
     pub paper_figure: String,
     /// What the figure shows, one or two sentences.
     pub caption: String,
@@ -636,7 +641,10 @@ fn header(h: &mut String, data: &ReportData) {
         item("command", format!("<code>{}</code>", esc(cmd)));
     }
     if let Some(t) = data.run_time_s {
-        item("run time", format!("{t:.1} s"));
+        item(
+            "run time",
+            format!("{t:.1} s (the study's computations; figures and this report not included)"),
+        );
     }
     if !data.seeds.is_empty() {
         let seeds: Vec<String> = data
@@ -810,18 +818,32 @@ fn table3(h: &mut String, data: &ReportData, reference: &Reference, checks: &[Ch
     if checks.is_empty() {
         h.push_str("<p>No acceptance bounds were given.</p>\n");
     } else {
-        let missed = checks.iter().filter(|c| !c.met).count();
+        let counted: Vec<&Check<'_>> = checks.iter().filter(|c| !c.bound.informational).collect();
+        let missed = counted.iter().filter(|c| !c.met).count();
         if missed == 0 {
             let _ = writeln!(
                 h,
                 "<p class=\"verdict pass\">All {} checks against acceptance bounds are met.</p>",
-                checks.len()
+                counted.len()
             );
         } else {
             let _ = writeln!(
                 h,
                 "<p class=\"verdict miss\">{missed} of {} checks against acceptance bounds miss.</p>",
-                checks.len()
+                counted.len()
+            );
+        }
+        let informational = checks.len() - counted.len();
+        if informational > 0 {
+            let missed = checks
+                .iter()
+                .filter(|c| c.bound.informational && !c.met)
+                .count();
+            let _ = writeln!(
+                h,
+                "<p class=\"verdict informational\">{informational} further checks are \
+                 informational (marked <i>informational</i>; not counted in the verdict above): \
+                 {missed} of them miss.</p>"
             );
         }
         h.push_str("<ul>\n");
@@ -838,12 +860,17 @@ fn table3(h: &mut String, data: &ReportData, reference: &Reference, checks: &[Ch
             };
             let _ = writeln!(
                 h,
-                "<li class=\"{}\">{} {run}: {value} {} the bound {} <span class=\"source\">({})</span></li>",
+                "<li class=\"{}\">{} {run}: {value} {} the bound {} <span class=\"source\">({}{})</span></li>",
                 if c.met { "pass" } else { "miss" },
                 if c.met { "✓" } else { "✗" },
                 if c.met { "meets" } else { "misses" },
                 esc(&bound_text(c.bound)),
-                esc(&c.bound.source)
+                esc(&c.bound.source),
+                if c.bound.informational {
+                    "; <i>informational</i>, not counted"
+                } else {
+                    ""
+                }
             );
         }
         h.push_str("</ul>\n");
@@ -863,11 +890,15 @@ fn figures_section(h: &mut String, data: &ReportData, sizes: &[(u32, u32)]) {
             esc(&f.png_file),
             esc(&f.caption)
         );
+        let equivalent = if f.paper_figure.is_empty() {
+            "no equivalent in the paper".to_string()
+        } else {
+            format!("the paper's {}", esc(&f.paper_figure))
+        };
         let _ = write!(
             h,
-            "<figcaption><b>Figure {}</b> (the paper's {}): {}",
+            "<figcaption><b>Figure {}</b> ({equivalent}): {}",
             k + 1,
-            esc(&f.paper_figure),
             esc(&f.caption)
         );
         if let Some(svg) = &f.svg_file {
@@ -1190,6 +1221,7 @@ mod tests {
                     min_percent: None,
                     max_percent: Some(3.0),
                     source: "the paper's e_mhe".to_string(),
+                    informational: false,
                 },
                 AcceptanceBound {
                     pipeline: Some("paper".to_string()),
@@ -1198,6 +1230,7 @@ mod tests {
                     min_percent: None,
                     max_percent: Some(3.0),
                     source: "the paper's e_mhe".to_string(),
+                    informational: false,
                 },
                 AcceptanceBound {
                     pipeline: Some("paper".to_string()),
@@ -1206,6 +1239,7 @@ mod tests {
                     min_percent: None,
                     max_percent: Some(0.75),
                     source: "the paper's e_rms".to_string(),
+                    informational: false,
                 },
                 AcceptanceBound {
                     pipeline: None,
@@ -1214,6 +1248,7 @@ mod tests {
                     min_percent: Some(10.0),
                     max_percent: Some(16.0),
                     source: "near the paper's 13 %".to_string(),
+                    informational: false,
                 },
             ],
             figures: vec![],

@@ -32,7 +32,9 @@ use hystcomp_stage::{Stage, StageConfig, StageError, quasi_static_stroke_um};
 use serde::Serialize;
 
 use crate::excitation::IdentificationExcitation;
-use crate::indices::{DEFAULT_MHE_BINS, IndexError, TrackingIndices};
+use crate::indices::{
+    DEFAULT_MHE_BINS, IndexError, MIN_SAMPLES_PER_BIN, TrackingIndices, max_mhe_bins,
+};
 use crate::{MultisineTrajectory, Reference};
 
 /// Particle swarm iterations of the study's `paper` pipeline.
@@ -50,7 +52,8 @@ pub struct StudyOptions {
     pub pso_seed: u64,
     /// Number of play operators (10, as in the paper).
     pub operators: usize,
-    /// Periods of the trajectory to track (at least 2; indices on the last one).
+    /// Periods of the trajectory to track (2 to [`MAX_STUDY_PERIODS`]; indices on the last
+    /// one).
     pub periods: usize,
     /// The identification excitation.
     pub excitation: IdentificationExcitation,
@@ -61,7 +64,8 @@ pub struct StudyOptions {
     /// iterations rather than the 200 of the crate's default: on this problem the swarm is still
     /// far from the optimum after 200 (see the convergence in the report).
     pub pso: PsoOptions,
-    /// Bins of the `y_d` range for e_mhe.
+    /// Bins of the `y_d` range for e_mhe (at most one per [`MIN_SAMPLES_PER_BIN`] samples of
+    /// the evaluated period).
     pub mhe_bins: usize,
 }
 
@@ -137,7 +141,7 @@ impl From<StageError> for StudyError {
 }
 
 /// Watches the study's long steps (a progress bar in the command line). The study never
-/// prints.
+/// prints. Step names are at most 12 characters (the width of the command line's labels).
 pub trait StudyObserver {
     /// A step begins, with `total` units of work.
     fn begin(&mut self, step: &str, total: u64);
@@ -192,6 +196,41 @@ pub struct TrackingRun {
     /// (% of the `y_d` range): how much of the tracking error is model mismatch. `None` for
     /// DIHC and the uncompensated run (no plant model in the loop).
     pub model_mismatch_rms_percent: Option<f64>,
+}
+
+/// How much the indices move when only the sensor noise changes: the uncompensated run and
+/// the exact IHC run, repeated with other noise seeds on the same stage and the same
+/// commands. A difference between two runs smaller than this spread is not a measured
+/// difference.
+#[derive(Debug, Clone, Serialize)]
+pub struct NoiseFloor {
+    /// The noise seeds of the tracking runs: the study's own (`seed + 1`) first, then the
+    /// extra ones.
+    pub seeds: Vec<u64>,
+    /// The uncompensated run's indices with each seed, % of the `y_d` range.
+    pub uncompensated: Vec<TrackingIndices>,
+    /// The exact IHC run's indices with each seed, % of the `y_d` range.
+    pub exact_ihc: Vec<TrackingIndices>,
+    /// The largest `max - min` of e_rms over the seeds, of either run, percentage points.
+    pub e_rms_spread_percent: f64,
+    /// The largest `max - min` of e_mhe over the seeds, of either run, percentage points.
+    pub e_mhe_spread_percent: f64,
+}
+
+/// One ablation run: the `exact` pipeline (least-squares plant model identified on the same
+/// excitation, exact IHC) on the study's stage with some effects switched off.
+#[derive(Debug, Clone, Serialize)]
+pub struct AblationRun {
+    /// What is switched off, e.g. `creep off`; `baseline` for the study's stage.
+    pub label: String,
+    /// The stage changes, in stage-file terms.
+    pub change: String,
+    /// Whether the change altered the stage at all (creep already off stays unchanged).
+    pub changed: bool,
+    /// RMS fit error of the re-identified plant model, % of the output range.
+    pub plant_fit_rms_percent: f64,
+    /// The exact IHC run's indices, % of the `y_d` range.
+    pub ihc: TrackingIndices,
 }
 
 /// One pipeline: its two models and its three runs.
@@ -253,6 +292,11 @@ pub struct Study {
     /// The cross runs: particle swarm models with exact inverses, least-squares models with
     /// delayed ones (IHC and WIHC each).
     pub cross_runs: Vec<TrackingRun>,
+    /// The noise floor of the tracking indices (other sensor-noise seeds).
+    pub noise_floor: NoiseFloor,
+    /// The ablation runs of the exact IHC: the baseline, then one effect off at a time, then
+    /// all of them off (only the hysteresis-model mismatch and quantisation remain).
+    pub ablations: Vec<AblationRun>,
     /// Wall-clock time of the identifications, s: (paper plant, paper inverse, exact plant,
     /// exact inverse).
     pub identification_times_s: [f64; 4],
@@ -283,6 +327,14 @@ pub fn run_study(
             "the study tracks at least 2 periods of the trajectory (indices on the last full \
              one), not {}",
             options.periods
+        )));
+    }
+    if options.periods > MAX_STUDY_PERIODS {
+        return Err(StudyError::Option(format!(
+            "the study tracks at most {MAX_STUDY_PERIODS} periods of the trajectory (each adds \
+             10 s of simulation to every one of its {} tracking runs and about 20 MB of \
+             memory), not {}; the indices use only the last period, so 2 is enough",
+            TRACKING_RUNS, options.periods
         )));
     }
     if options.decimation == 0 {
@@ -329,6 +381,7 @@ pub fn run_study(
     pso.seed = options.pso_seed;
     let mut times = [0.0; 4];
     let mut fit = |name: &str,
+                   step: &str,
                    direction: Direction,
                    solver: Solver,
                    slot: usize,
@@ -343,7 +396,7 @@ pub fn run_study(
             Solver::ParticleSwarm(p) => p.iterations as u64,
             Solver::LeastSquares => 1,
         };
-        observer.begin(name, total);
+        observer.begin(step, total);
         let t = Instant::now();
         let mut convergence = Vec::new();
         let is_swarm = matches!(solver, Solver::ParticleSwarm(_));
@@ -365,6 +418,7 @@ pub fn run_study(
     };
     let (paper_plant, paper_plant_convergence) = fit(
         "paper plant (PSO)",
+        "PSO plant",
         Direction::Plant,
         Solver::ParticleSwarm(pso.clone()),
         0,
@@ -372,6 +426,7 @@ pub fn run_study(
     )?;
     let (paper_inverse, paper_inverse_convergence) = fit(
         "paper inverse (PSO)",
+        "PSO inverse",
         Direction::Inverse,
         Solver::ParticleSwarm(pso),
         1,
@@ -379,6 +434,7 @@ pub fn run_study(
     )?;
     let (exact_plant, _) = fit(
         "exact plant (LS)",
+        "LS plant",
         Direction::Plant,
         Solver::LeastSquares,
         2,
@@ -386,6 +442,7 @@ pub fn run_study(
     )?;
     let (exact_inverse, _) = fit(
         "exact inverse (LS)",
+        "LS inverse",
         Direction::Inverse,
         Solver::LeastSquares,
         3,
@@ -400,7 +457,36 @@ pub fn run_study(
     let per_period = (period_s * fs).round() as usize;
     let (time_s, desired) = trajectory.sample(fs, samples);
     let evaluation_start = samples - per_period;
+    if options.mhe_bins == 0 || options.mhe_bins > max_mhe_bins(per_period) {
+        return Err(StudyError::Option(format!(
+            "{} e_mhe bins for the {per_period} samples of the evaluated period: use 1 to {} \
+             bins (at least {MIN_SAMPLES_PER_BIN} samples per bin on average)",
+            options.mhe_bins,
+            max_mhe_bins(per_period)
+        )));
+    }
     let stroke_um = quasi_static_stroke_um(&options.stage)?;
+    let desired_max = desired.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+    if stroke_um.is_nan() || stroke_um < desired_max {
+        return Err(StudyError::Option(format!(
+            "the stage cannot reach the trajectory: its quasi-static stroke at full command \
+             ({full_scale:.3} V, {:.1} V at the amplifier) is {stroke_um:.2} um, below the \
+             trajectory's maximum of {desired_max:.2} um; give the stage more stroke (e.g. \
+             hysteresis.preisach.stroke_um or hysteresis.bouc_wen.d_p_um_per_v) or more \
+             voltage (amplifier.output_max_v)",
+            options.stage.amplifier.output_max_v
+        )));
+    }
+    let sensor_span_um = options.stage.adc.max_v / options.stage.sensor.sensitivity_v_per_um;
+    if sensor_span_um < desired_max {
+        return Err(StudyError::Option(format!(
+            "the stage's sensor cannot read the trajectory: its span ends at adc.max_v / \
+             sensor.sensitivity_v_per_um = {} / {} = {sensor_span_um:.2} um, below the \
+             trajectory's maximum of {desired_max:.2} um, so the measured position would \
+             saturate; raise adc.max_v or lower sensor.sensitivity_v_per_um",
+            options.stage.adc.max_v, options.stage.sensor.sensitivity_v_per_um
+        )));
+    }
     let gain = full_scale / stroke_um;
     let tracking_seed = options.seed.wrapping_add(1);
 
@@ -453,37 +539,21 @@ pub fn run_study(
             Some(&exact_plant),
         ),
     ];
-    observer.begin("tracking runs", jobs.len() as u64);
+    observer.begin("tracking", jobs.len() as u64);
     let mut runs = Vec::with_capacity(jobs.len());
     for (k, (label, method, model)) in jobs.into_iter().enumerate() {
         let (command_v, saturated) = match (method, model) {
-            (Some(method), Some(model)) => {
-                let mut c = ScaledCompensator::new(&model.model, method, Some((0.0, full_scale)))
-                    .map_err(|error| StudyError::Compensator {
-                    run: label.clone(),
-                    error,
-                })?;
-                let mut out = vec![0.0; samples];
-                c.process(&desired, &mut out)
-                    .map_err(|error| StudyError::Compensator {
-                        run: label.clone(),
-                        error,
-                    })?;
-                (out, c.diagnostics().saturated)
-            }
+            (Some(method), Some(model)) => drive(model, method, &desired, full_scale, &label)?,
             _ => (desired.iter().map(|y| y * gain).collect(), 0),
         };
-        let mut stage = Stage::new(&options.stage, tracking_seed)?;
-        let measured = stage.run(&command_v).measured_position_um;
-        let indices = TrackingIndices::compute(
-            &desired[evaluation_start..],
-            &measured[evaluation_start..],
+        let measured = track(&options.stage, tracking_seed, &command_v)?;
+        let indices = evaluate(
+            &desired,
+            &measured,
+            evaluation_start,
             options.mhe_bins,
-        )
-        .map_err(|error| StudyError::Index {
-            run: label.clone(),
-            error,
-        })?;
+            &label,
+        )?;
         let model_mismatch_rms_percent = match (method, model) {
             (Some(m), Some(model)) if m.needs() == Direction::Plant => {
                 let predicted = model
@@ -508,6 +578,107 @@ pub fn run_study(
             indices,
             saturated,
             model_mismatch_rms_percent,
+        });
+        observer.advance(k as u64 + 1);
+    }
+    observer.end();
+
+    // 4. The noise floor: the uncompensated and the exact IHC commands again, with other
+    // sensor-noise seeds.
+    let extra_seeds: Vec<u64> = (2..2 + NOISE_FLOOR_EXTRA_SEEDS)
+        .map(|k| options.seed.wrapping_add(k))
+        .collect();
+    let exact_ihc_index = 4; // uncompensated, 3 paper runs, then exact / ihc
+    let mut floor = NoiseFloor {
+        seeds: std::iter::once(tracking_seed)
+            .chain(extra_seeds.iter().copied())
+            .collect(),
+        uncompensated: vec![runs[0].indices],
+        exact_ihc: vec![runs[exact_ihc_index].indices],
+        e_rms_spread_percent: 0.0,
+        e_mhe_spread_percent: 0.0,
+    };
+    observer.begin("noise floor", 2 * extra_seeds.len() as u64);
+    for (k, &seed) in extra_seeds.iter().enumerate() {
+        for (slot, run) in [(0usize, &runs[0]), (1, &runs[exact_ihc_index])] {
+            let label = format!("{} (noise seed {seed})", run.label);
+            let measured = track(&options.stage, seed, &run.command_v)?;
+            let indices = evaluate(
+                &desired,
+                &measured,
+                evaluation_start,
+                options.mhe_bins,
+                &label,
+            )?;
+            if slot == 0 {
+                floor.uncompensated.push(indices);
+            } else {
+                floor.exact_ihc.push(indices);
+            }
+            observer.advance(2 * k as u64 + slot as u64 + 1);
+        }
+    }
+    observer.end();
+    let spread = |runs: &[TrackingIndices], f: fn(&TrackingIndices) -> f64| {
+        let (lo, hi) = runs
+            .iter()
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), r| {
+                (a.min(f(r)), b.max(f(r)))
+            });
+        hi - lo
+    };
+    floor.e_rms_spread_percent = spread(&floor.uncompensated, |r| r.e_rms_percent)
+        .max(spread(&floor.exact_ihc, |r| r.e_rms_percent));
+    floor.e_mhe_spread_percent = spread(&floor.uncompensated, |r| r.e_mhe_percent)
+        .max(spread(&floor.exact_ihc, |r| r.e_mhe_percent));
+
+    // 5. Ablations: the exact pipeline (LS plant model, exact IHC) with effects switched off.
+    let variants = ablation_variants(&options.stage);
+    observer.begin("ablations", variants.len() as u64);
+    let mut ablations = vec![AblationRun {
+        label: "baseline".into(),
+        change: "none (the study's stage)".into(),
+        changed: false,
+        plant_fit_rms_percent: exact_plant.report.fit.rms_percent,
+        ihc: runs[exact_ihc_index].indices,
+    }];
+    for (k, (label, change, config)) in variants.into_iter().enumerate() {
+        let changed = config != options.stage;
+        let mut stage = Stage::new(&config, options.seed)?;
+        let response = stage.run(&record.command_v);
+        let y: Vec<f64> = response
+            .measured_position_um
+            .iter()
+            .step_by(options.decimation)
+            .copied()
+            .collect();
+        let opts = IdentifyOptions {
+            direction: Direction::Plant,
+            method: Solver::LeastSquares,
+            ..base.clone()
+        };
+        let plant = identify_observed(&v, &y, &opts, &mut |_: &Progress| {}).map_err(|error| {
+            StudyError::Identify {
+                model: format!("{label} plant"),
+                error,
+            }
+        })?;
+        let run_label = format!("{label} / ihc");
+        let (command_v, _) = drive(&plant, Method::Ihc, &desired, full_scale, &run_label)?;
+        let measured = track(&config, tracking_seed, &command_v)?;
+        let ihc = evaluate(
+            &desired,
+            &measured,
+            evaluation_start,
+            options.mhe_bins,
+            &run_label,
+        )?;
+        ablations.push(AblationRun {
+            label: label.into(),
+            change,
+            changed,
+            plant_fit_rms_percent: plant.report.fit.rms_percent,
+            ihc,
         });
         observer.advance(k as u64 + 1);
     }
@@ -552,8 +723,107 @@ pub fn run_study(
             },
         ],
         cross_runs,
+        noise_floor: floor,
+        ablations,
         identification_times_s: times,
         elapsed_s: started.elapsed().as_secs_f64(),
+    })
+}
+
+/// The most trajectory periods the study tracks.
+pub const MAX_STUDY_PERIODS: usize = 20;
+
+/// Stage runs of the trajectory in one study: 11 tracking runs, the noise floor's replays and
+/// the ablations.
+pub const TRACKING_RUNS: usize = 11 + 2 * NOISE_FLOOR_EXTRA_SEEDS as usize + 4;
+
+/// Extra sensor-noise seeds of the noise floor.
+pub const NOISE_FLOOR_EXTRA_SEEDS: u64 = 4;
+
+/// The stages of the ablation runs: `(label, change, stage)`, one effect off at a time, then
+/// all of them.
+pub fn ablation_variants(stage: &StageConfig) -> Vec<(&'static str, String, StageConfig)> {
+    let creep_off = |c: &mut StageConfig| c.creep.percent_per_decade = 0.0;
+    let noise_off = |c: &mut StageConfig| c.sensor.noise_rms_nm = 0.0;
+    let dynamics_off = |c: &mut StageConfig| {
+        // An amplifier that follows within a sample (bandwidth and current limit far beyond
+        // anything the trajectory asks) and a rigid stage (no resonance).
+        c.amplifier.bandwidth_hz = 1e9;
+        c.amplifier.peak_current_ma = 1e9;
+        c.mechanics.rigid = true;
+    };
+    let with = |f: &dyn Fn(&mut StageConfig)| {
+        let mut c = stage.clone();
+        f(&mut c);
+        c
+    };
+    vec![
+        (
+            "creep off",
+            "creep.percent_per_decade = 0".into(),
+            with(&creep_off),
+        ),
+        (
+            "sensor noise off",
+            "sensor.noise_rms_nm = 0".into(),
+            with(&noise_off),
+        ),
+        (
+            "dynamics off",
+            "amplifier.bandwidth_hz = 1e9, amplifier.peak_current_ma = 1e9, mechanics.rigid = \
+             true"
+                .into(),
+            with(&dynamics_off),
+        ),
+        (
+            "creep, noise and dynamics off",
+            "all three changes above".into(),
+            with(&|c: &mut StageConfig| {
+                creep_off(c);
+                noise_off(c);
+                dynamics_off(c);
+            }),
+        ),
+    ]
+}
+
+/// The command `method` sends for `desired` with `model`, and the samples it clamped.
+fn drive(
+    model: &Identification,
+    method: Method,
+    desired: &[f64],
+    full_scale: f64,
+    label: &str,
+) -> Result<(Vec<f64>, u64), StudyError> {
+    let error = |error| StudyError::Compensator {
+        run: label.to_string(),
+        error,
+    };
+    let mut c =
+        ScaledCompensator::new(&model.model, method, Some((0.0, full_scale))).map_err(error)?;
+    let mut out = vec![0.0; desired.len()];
+    c.process(desired, &mut out).map_err(error)?;
+    Ok((out, c.diagnostics().saturated))
+}
+
+/// The measured position of a fresh stage driven by `command_v`, um.
+fn track(stage: &StageConfig, seed: u64, command_v: &[f64]) -> Result<Vec<f64>, StudyError> {
+    Ok(Stage::new(stage, seed)?.run(command_v).measured_position_um)
+}
+
+/// The indices of a run on the evaluation window.
+fn evaluate(
+    desired: &[f64],
+    measured: &[f64],
+    start: usize,
+    bins: usize,
+    label: &str,
+) -> Result<TrackingIndices, StudyError> {
+    TrackingIndices::compute(&desired[start..], &measured[start..], bins).map_err(|error| {
+        StudyError::Index {
+            run: label.to_string(),
+            error,
+        }
     })
 }
 

@@ -17,7 +17,7 @@ use crate::report::{
     AcceptanceBound, Fact, FigureEntry, IndexName, ModelParameters, PipelineResult, ReportData,
     ReportError, Seed, TextSection, write_report,
 };
-use crate::study::{Study, StudyObserver, TrackingRun};
+use crate::study::{AblationRun, NoiseFloor, Study, StudyObserver, TrackingRun};
 use crate::{Reference, TrackingIndices};
 
 /// The numbers of the study, for people (printed) and machines (`--json`).
@@ -35,16 +35,24 @@ pub struct StudySummary {
     pub cross_runs: Vec<RunSummary>,
     /// Every acceptance check and whether it passed.
     pub acceptance: Vec<AcceptanceCheck>,
-    /// Wall-clock time of the study, s.
+    /// Informational checks (the `paper` pipeline against the same bounds): shown, not
+    /// counted in the acceptance.
+    pub informational: Vec<AcceptanceCheck>,
+    /// The noise floor of the indices (other sensor-noise seeds).
+    pub noise_floor: NoiseFloor,
+    /// The ablation runs of the exact IHC (baseline first).
+    pub ablations: Vec<AblationRun>,
+    /// Wall-clock time of the study's computations (not the figures or the report), s.
     pub elapsed_s: f64,
 }
 
-/// The paper's Table 3.
+/// The paper's Table 3. The JSON keys carry the `_percent` suffix of our own indices.
 #[derive(Debug, Clone, Serialize)]
 pub struct PublishedTable3 {
-    /// Uncompensated e_mhe, %.
+    /// Uncompensated e_mhe, % (JSON `uncompensated_e_mhe_percent`).
+    #[serde(rename = "uncompensated_e_mhe_percent")]
     pub uncompensated_e_mhe: f64,
-    /// IHC, %.
+    /// IHC, % (JSON keys `e_mhe_percent`, `e_m_percent`, `e_rms_percent`).
     pub ihc: ReferenceIndices,
     /// WIHC, %.
     pub wihc: ReferenceIndices,
@@ -104,7 +112,8 @@ fn run_summary(run: &TrackingRun) -> RunSummary {
 
 /// The acceptance bounds of the study: the `exact` pipeline's three approaches cut e_mhe to
 /// <= 3 % with e_rms <= 0.75 % (the paper's level on hardware), and the default stage's
-/// uncompensated e_mhe is 13 % +- 1.5.
+/// uncompensated e_mhe is 13 % +- 1.5. The same two bounds on the `paper` pipeline are
+/// informational: shown, not counted.
 pub fn acceptance_bounds() -> Vec<AcceptanceBound> {
     vec![
         AcceptanceBound {
@@ -114,6 +123,7 @@ pub fn acceptance_bounds() -> Vec<AcceptanceBound> {
             min_percent: Some(11.5),
             max_percent: Some(14.5),
             source: "the stage calibration: 13 % +- 1.5, the paper's figure".into(),
+            informational: false,
         },
         AcceptanceBound {
             pipeline: Some("exact".into()),
@@ -122,6 +132,7 @@ pub fn acceptance_bounds() -> Vec<AcceptanceBound> {
             min_percent: None,
             max_percent: Some(3.0),
             source: "the paper's e_mhe on hardware".into(),
+            informational: false,
         },
         AcceptanceBound {
             pipeline: Some("exact".into()),
@@ -130,6 +141,27 @@ pub fn acceptance_bounds() -> Vec<AcceptanceBound> {
             min_percent: None,
             max_percent: Some(0.75),
             source: "the paper's e_rms on hardware".into(),
+            informational: false,
+        },
+        AcceptanceBound {
+            pipeline: Some("paper".into()),
+            compensator: None,
+            index: IndexName::EMhe,
+            min_percent: None,
+            max_percent: Some(3.0),
+            source: "the exact pipeline's bound, applied to the paper pipeline for information"
+                .into(),
+            informational: true,
+        },
+        AcceptanceBound {
+            pipeline: Some("paper".into()),
+            compensator: None,
+            index: IndexName::ERms,
+            min_percent: None,
+            max_percent: Some(0.75),
+            source: "the exact pipeline's bound, applied to the paper pipeline for information"
+                .into(),
+            informational: true,
         },
     ]
 }
@@ -139,6 +171,7 @@ pub fn summarize(study: &Study) -> StudySummary {
     let reference = Reference::paper();
     let t3 = &reference.table3_results_percent;
     let mut acceptance = Vec::new();
+    let mut informational = Vec::new();
     for bound in acceptance_bounds() {
         let runs: Vec<&TrackingRun> = match &bound.pipeline {
             None => vec![&study.uncompensated],
@@ -157,12 +190,17 @@ pub fn summarize(study: &Study) -> StudySummary {
                 (Some(lo), None) => format!("{} >= {lo} %", bound.index.name()),
                 (None, None) => "no bound".into(),
             };
-            acceptance.push(AcceptanceCheck {
+            let check = AcceptanceCheck {
                 what: format!("{}: {}", run.label, bound.index.name()),
                 value,
                 bound: text,
                 passed,
-            });
+            };
+            if bound.informational {
+                informational.push(check);
+            } else {
+                acceptance.push(check);
+            }
         }
     }
     StudySummary {
@@ -187,6 +225,9 @@ pub fn summarize(study: &Study) -> StudySummary {
             .collect(),
         cross_runs: study.cross_runs.iter().map(run_summary).collect(),
         acceptance,
+        informational,
+        noise_floor: study.noise_floor.clone(),
+        ablations: study.ablations.clone(),
         elapsed_s: study.elapsed_s,
     }
 }
@@ -255,7 +296,80 @@ impl fmt::Display for StudySummary {
                 writeln!(f, "  {} = {:.2} % (bound {})", m.what, m.value, m.bound)?;
             }
         }
+        if !self.informational.is_empty() {
+            let misses: Vec<&AcceptanceCheck> =
+                self.informational.iter().filter(|a| !a.passed).collect();
+            writeln!(
+                f,
+                "informational (paper pipeline against the same bounds, not counted): {} of {} \
+                 pass{}",
+                self.informational.len() - misses.len(),
+                self.informational.len(),
+                if misses.is_empty() { "" } else { "; misses:" }
+            )?;
+            for m in misses {
+                writeln!(f, "  {} = {:.2} % (bound {})", m.what, m.value, m.bound)?;
+            }
+        }
+        let floor = &self.noise_floor;
+        writeln!(
+            f,
+            "noise floor (spread over {} sensor-noise seeds): e_rms {:.4} points, e_mhe {:.3} points",
+            floor.seeds.len(),
+            floor.e_rms_spread_percent,
+            floor.e_mhe_spread_percent
+        )?;
+        writeln!(f, "ablation, exact IHC (e_mhe / e_rms, %):")?;
+        for a in &self.ablations {
+            writeln!(
+                f,
+                "  {:<32}{:>8.2}{:>8.3}",
+                a.label, a.ihc.e_mhe_percent, a.ihc.e_rms_percent
+            )?;
+        }
         Ok(())
+    }
+}
+
+/// The configured hysteresis of a stage, in words (for the report's text).
+pub fn hysteresis_description(stage: &hystcomp_stage::StageConfig) -> String {
+    use hystcomp_stage::HysteresisModel;
+    let h = &stage.hysteresis;
+    match h.model {
+        HysteresisModel::Preisach => format!(
+            "Preisach hysteresis (a smooth, asymmetric relay density, relay-width SD {}, tilt \
+             {}, on a {}-cell grid, {:.0} % of the stroke reversible)",
+            h.preisach.relay_width_sd,
+            h.preisach.density_tilt,
+            h.preisach.grid_cells,
+            h.preisach.reversible_fraction * 100.0
+        ),
+        HysteresisModel::BoucWen => format!(
+            "asymmetric Bouc-Wen hysteresis (A = {}, B = {} 1/V, Gamma = {} 1/V, d_p = {} um/V, \
+             asymmetry {} u^2 + {} u^3 um)",
+            h.bouc_wen.a,
+            h.bouc_wen.b,
+            h.bouc_wen.gamma,
+            h.bouc_wen.d_p_um_per_v,
+            h.bouc_wen.quadratic_um,
+            h.bouc_wen.cubic_um
+        ),
+        HysteresisModel::Mpim => format!(
+            "MPIM hysteresis read from {} (a test stage: the compensators' own model structure)",
+            h.mpim
+                .model_file
+                .as_ref()
+                .map_or("a model file".into(), |p| p.display().to_string())
+        ),
+    }
+}
+
+/// Whether a difference of `delta` points exceeds the noise floor `floor`, in words.
+fn against_floor(delta: f64, floor: f64) -> &'static str {
+    if delta.abs() > floor {
+        "above the noise floor"
+    } else {
+        "within the noise floor"
     }
 }
 
@@ -266,6 +380,9 @@ pub fn explanations(study: &Study) -> Vec<TextSection> {
         return sections;
     };
     let rms = |run: Option<&TrackingRun>| run.map_or(f64::NAN, |r| r.indices.e_rms_percent);
+    let mhe = |run: Option<&TrackingRun>| run.map_or(f64::NAN, |r| r.indices.e_mhe_percent);
+    let floor = &study.noise_floor;
+    let (rms_floor, mhe_floor) = (floor.e_rms_spread_percent, floor.e_mhe_spread_percent);
     let mut paragraphs = Vec::new();
     let at = |curve: &[f64], iteration: usize| {
         curve
@@ -273,6 +390,19 @@ pub fn explanations(study: &Study) -> Vec<TextSection> {
             .copied()
             .unwrap_or(f64::NAN)
     };
+    paragraphs.push(format!(
+        "Noise floor: the uncompensated and the exact IHC commands, replayed on the same stage \
+         with {} other sensor-noise seeds ({} in all: {:?}), move e_rms by at most {:.4} points \
+         and e_mhe by at most {:.3} points. Below, a difference between two runs counts as \
+         measured only when it exceeds this spread. The floor covers the sensor noise only: \
+         the particle swarm's own seed is another source of spread, not measured here (rerun \
+         with another --seed to see it).",
+        floor.seeds.len().saturating_sub(1),
+        floor.seeds.len(),
+        floor.seeds,
+        rms_floor,
+        mhe_floor,
+    ));
     paragraphs.push(format!(
         "Both pipelines use the same thresholds (eq. (11), n = {}) and the same identification \
          record. Least squares reaches the global optimum for those thresholds: plant fit RMS \
@@ -316,19 +446,39 @@ pub fn explanations(study: &Study) -> Vec<TextSection> {
         let ls_delayed = rms(study.cross_run(&format!("LS models / {family}-delayed")));
         let model_effect = 0.5 * ((pso_exact - ls_exact) + (pso_delayed - ls_delayed));
         let solve_effect = 0.5 * ((ls_delayed - ls_exact) + (pso_delayed - pso_exact));
-        let dominant = if model_effect.abs() >= solve_effect.abs() {
-            "the identification (particle swarm instead of least squares), not the delayed solve"
-        } else {
-            "the delayed solve, not the identification"
+        let model_real = model_effect.abs() > rms_floor;
+        let solve_real = solve_effect.abs() > rms_floor;
+        let verdict = match (model_real, solve_real) {
+            (false, false) => format!(
+                "neither exceeds the noise floor of {rms_floor:.4} points, so for {} the two \
+                 pipelines do not differ measurably",
+                family.to_uppercase()
+            ),
+            (true, false) => format!(
+                "only the models' effect exceeds the noise floor of {rms_floor:.4} points: the \
+                 gap comes from the identification (particle swarm instead of least squares)"
+            ),
+            (false, true) => format!(
+                "only the delayed solve's effect exceeds the noise floor of {rms_floor:.4} \
+                 points: the gap comes from the one-sample delay, not the identification"
+            ),
+            (true, true) => format!(
+                "both exceed the noise floor of {rms_floor:.4} points; the larger is {}",
+                if model_effect.abs() >= solve_effect.abs() {
+                    "the identification's"
+                } else {
+                    "the delayed solve's"
+                }
+            ),
         };
+        let mhe_gap = mhe(paper.run(family)) - mhe(exact.run(family));
         paragraphs.push(format!(
             "{}: e_rms is {:.3} % with least-squares models and the exact solve (exact \
              pipeline), {:.3} % with least-squares models and the delayed solve, {:.3} % with \
              particle swarm models and the exact solve, and {:.3} % with particle swarm models \
              and the delayed solve (paper pipeline). Averaged over the other factor, the models \
-             change e_rms by {:+.3} points and the delayed solve by {:+.3} points: the gap \
-             between the pipelines comes from {}. At {:.0} Hz one sample of delay is small \
-             against the trajectory's 1 Hz.",
+             change e_rms by {:+.4} points and the delayed solve by {:+.4} points; {}. e_mhe \
+             differs between the pipelines by {:+.3} points, {} ({:.3} points).",
             family.to_uppercase(),
             ls_exact,
             ls_delayed,
@@ -336,40 +486,140 @@ pub fn explanations(study: &Study) -> Vec<TextSection> {
             pso_delayed,
             model_effect,
             solve_effect,
-            dominant,
-            study.sample_rate_hz,
+            verdict,
+            mhe_gap,
+            against_floor(mhe_gap, mhe_floor),
+            mhe_floor,
         ));
     }
-    paragraphs.push(format!(
-        "DIHC runs the same law in both pipelines; only its inverse model differs: e_rms {:.3} % \
-         with the least-squares model, {:.3} % with the particle swarm model.",
-        rms(exact.run("dihc")),
-        rms(paper.run("dihc")),
-    ));
+    if let (Some(dihc), Some(ihc)) = (exact.run("dihc"), exact.run("ihc")) {
+        let start = study.evaluation_start;
+        let full_scale = study.options.stage.full_scale_command_v();
+        let command_gap = (dihc.command_v[start..]
+            .iter()
+            .zip(&ihc.command_v[start..])
+            .map(|(a, b)| (a - b).powi(2))
+            .sum::<f64>()
+            / (dihc.command_v.len() - start) as f64)
+            .sqrt()
+            / full_scale
+            * 100.0;
+        let gap = dihc.indices.e_rms_percent - ihc.indices.e_rms_percent;
+        let (plant_fit, inverse_fit) = (
+            exact.plant.report.fit.rms_percent,
+            exact.inverse.report.fit.rms_percent,
+        );
+        let fits = if inverse_fit > plant_fit {
+            format!(
+                "the inverse MPIM (position -> voltage) fits the identification record {:.1} \
+                 times worse than the plant MPIM ({inverse_fit:.3} % of the voltage range \
+                 against {plant_fit:.3} % of the position range, both least-squares optima): \
+                 ten one-sided play operators and a cubic describe this stage's inverse \
+                 hysteresis less well than its forward hysteresis",
+                inverse_fit / plant_fit
+            )
+        } else {
+            format!(
+                "its inverse MPIM fits the identification record no worse than the plant MPIM \
+                 ({inverse_fit:.3} % against {plant_fit:.3} %), so the fit does not explain it"
+            )
+        };
+        paragraphs.push(format!(
+            "DIHC runs the same law in both pipelines; only its inverse model differs: e_rms \
+             {:.3} % with the least-squares model, {:.3} % with the particle swarm model. It \
+             comes out {} in the exact pipeline ({:+.3} e_rms points against IHC, {} of \
+             {rms_floor:.4}): {fits}. Over the evaluated period DIHC's command differs from exact \
+             IHC's by {command_gap:.3} % of the full-scale command (RMS).",
+            rms(exact.run("dihc")),
+            rms(paper.run("dihc")),
+            if gap > rms_floor {
+                "worse than IHC"
+            } else if gap < -rms_floor {
+                "better than IHC"
+            } else {
+                "level with IHC"
+            },
+            gap,
+            against_floor(gap, rms_floor).replace("the noise floor", "the floor"),
+        ));
+    }
     sections.push(TextSection {
         heading: "Why the pipelines differ (measured)".into(),
         paragraphs,
     });
 
     let mut limits = Vec::new();
-    for family in ["ihc", "wihc"] {
-        if let Some(run) = exact.run(family) {
-            if let Some(mismatch) = run.model_mismatch_rms_percent {
-                limits.push(format!(
-                    "Exact {}: the plant model, driven by the voltage the compensator sent, \
-                     predicts the measured position to {:.3} % RMS of the range over the \
-                     evaluated period, against a tracking e_rms of {:.3} %. The exact \
-                     compensator inverts its model to 1e-13, so what remains is the mismatch \
-                     between the model and the stage: creep (a slow drift the rate-independent \
-                     MPIM cannot hold), the stage's Preisach hysteresis that {} one-sided play \
-                     operators approximate, dynamics and sensor noise.",
-                    family.to_uppercase(),
-                    mismatch,
-                    run.indices.e_rms_percent,
-                    study.options.operators,
-                ));
-            }
+    let stage_text = hysteresis_description(&study.options.stage);
+    limits.push(format!(
+        "Ablation: the exact pipeline (least-squares plant model identified on the same \
+         excitation, exact IHC) rerun on this stage with one effect switched off at a time, then \
+         all of them; the stage's hysteresis is {stage_text}. Each row re-identifies the model \
+         on the changed stage."
+    ));
+    let base = study.ablations.first();
+    for a in &study.ablations {
+        let delta = base.map_or(f64::NAN, |b| a.ihc.e_rms_percent - b.ihc.e_rms_percent);
+        let unchanged = if a.label != "baseline" && !a.changed {
+            " (already so in this stage: the same as the baseline)"
+        } else {
+            ""
+        };
+        limits.push(format!(
+            "{} [{}]{unchanged}: plant fit {:.3} %, exact IHC e_mhe {:.2} %, e_m {:.2} %, e_rms \
+             {:.3} % ({:+.3} points against the baseline).",
+            a.label,
+            a.change,
+            a.plant_fit_rms_percent,
+            a.ihc.e_mhe_percent,
+            a.ihc.e_m_percent,
+            a.ihc.e_rms_percent,
+            delta,
+        ));
+    }
+    if let (Some(base), Some(all_off)) = (base, study.ablations.last()) {
+        let singles = &study.ablations[1..study.ablations.len().saturating_sub(1)];
+        let largest = singles.iter().max_by(|a, b| {
+            (base.ihc.e_rms_percent - a.ihc.e_rms_percent)
+                .total_cmp(&(base.ihc.e_rms_percent - b.ihc.e_rms_percent))
+        });
+        let share = all_off.ihc.e_rms_percent / base.ihc.e_rms_percent * 100.0;
+        let mut text = format!(
+            "With creep, sensor noise and dynamics all off, what remains is the mismatch \
+             between the stage's {} and the MPIM's {} one-sided play operators (plus the \
+             converters' quantisation): e_rms {:.3} %, {share:.0} % of the baseline's {:.3} %, \
+             and e_mhe {:.2} % against {:.2} %.",
+            match study.options.stage.hysteresis.model {
+                hystcomp_stage::HysteresisModel::Preisach => "Preisach hysteresis",
+                hystcomp_stage::HysteresisModel::BoucWen => "Bouc-Wen hysteresis",
+                hystcomp_stage::HysteresisModel::Mpim => "MPIM hysteresis",
+            },
+            study.options.operators,
+            all_off.ihc.e_rms_percent,
+            base.ihc.e_rms_percent,
+            all_off.ihc.e_mhe_percent,
+            base.ihc.e_mhe_percent,
+        );
+        if share >= 50.0 {
+            text.push_str(
+                " The hysteresis-model mismatch dominates what limits the exact pipeline.",
+            );
+        } else {
+            text.push_str(
+                " The effects switched off, not the hysteresis-model mismatch, dominate what \
+                 limits the exact pipeline.",
+            );
         }
+        if let Some(l) = largest {
+            let d = base.ihc.e_rms_percent - l.ihc.e_rms_percent;
+            let _ = write!(
+                text,
+                " Of the single effects, {} lowers e_rms the most ({:+.3} points, {}).",
+                l.label,
+                -d,
+                against_floor(d, rms_floor)
+            );
+        }
+        limits.push(text);
     }
     limits.push(format!(
         "e_mhe counts the widest vertical spread of the y versus y_d map in {} bins of the \
@@ -578,7 +828,7 @@ pub fn write_outputs(
         let files = figures::write_panel_figure(dir, "fig00_identification", &panel)?;
         log.record(
             files,
-            "(none; section 4.2)".into(),
+            String::new(),
             "The identification experiment: nested reversals and a multisine from rest, \
                       measured position against command voltage."
                 .into(),
@@ -612,7 +862,7 @@ pub fn write_outputs(
             let files = figures::write_panel_figure(dir, "fig01_pso_convergence", &panel)?;
             log.record(
                 files,
-                "(none; section 4.2)".into(),
+                String::new(),
                 "Identification: the particle swarm's best RMS fit error after each iteration \
                  (from the 20th), against the least-squares optimum for the same thresholds."
                     .into(),
@@ -799,8 +1049,14 @@ pub fn write_outputs(
                     .filter(|r| r.saturated > 0)
                     .map(|r| {
                         format!(
-                            "{}: {} samples clamped to the drive limits",
-                            r.label, r.saturated
+                            "{}: {} {} clamped to the drive limits",
+                            r.label,
+                            r.saturated,
+                            if r.saturated == 1 {
+                                "sample"
+                            } else {
+                                "samples"
+                            }
                         )
                     })
                     .collect(),

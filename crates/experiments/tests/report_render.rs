@@ -145,6 +145,7 @@ fn report_data(figures: Vec<FigureEntry>) -> ReportData {
                 min_percent: None,
                 max_percent: Some(3.0),
                 source: "the paper's e_mhe".to_string(),
+                informational: false,
             },
             AcceptanceBound {
                 pipeline: Some("paper".to_string()),
@@ -153,6 +154,7 @@ fn report_data(figures: Vec<FigureEntry>) -> ReportData {
                 min_percent: None,
                 max_percent: Some(3.0),
                 source: "the paper's e_mhe".to_string(),
+                informational: false,
             },
         ],
         figures,

@@ -80,6 +80,75 @@ fn default_study_meets_the_acceptance_bounds_and_writes_a_report_chromium_shows(
         html.contains(&exact_ihc),
         "the report should quote {exact_ihc}"
     );
+    // The noise floor comes from runs with other noise seeds: they differ, but little.
+    let floor = &study.noise_floor;
+    assert_eq!(floor.seeds.len(), 5);
+    assert_eq!(floor.exact_ihc.len(), 5);
+    assert_eq!(floor.exact_ihc[0], exact.runs[0].indices);
+    assert!(floor.e_rms_spread_percent > 0.0 && floor.e_rms_spread_percent < 0.01);
+    assert!(floor.e_mhe_spread_percent > 0.0 && floor.e_mhe_spread_percent < 0.2);
+    assert!(html.contains(&format!("{:.4} points", floor.e_rms_spread_percent)));
+    // The ablations come from runs: switching creep off changes the result (creep is
+    // configured), switching everything off leaves less error than the baseline, and each
+    // row's numbers are in the report and in study.json.
+    let ablation = |label: &str| {
+        study
+            .ablations
+            .iter()
+            .find(|a| a.label == label)
+            .unwrap_or_else(|| panic!("no ablation {label}"))
+    };
+    let base = ablation("baseline");
+    assert_eq!(base.ihc, exact.runs[0].indices);
+    let creep_off = ablation("creep off");
+    assert!(creep_off.changed);
+    assert_ne!(creep_off.ihc, base.ihc);
+    assert!(creep_off.plant_fit_rms_percent < base.plant_fit_rms_percent);
+    let all_off = ablation("creep, noise and dynamics off");
+    assert!(all_off.ihc.e_rms_percent < base.ihc.e_rms_percent);
+    assert!(ablation("sensor noise off").changed && ablation("dynamics off").changed);
+    for a in &study.ablations {
+        let row = format!("{} [", a.label);
+        assert!(
+            html.contains(&row),
+            "the report lacks the ablation row {row}"
+        );
+        assert!(
+            html.contains(&format!("e_rms {:.3} %", a.ihc.e_rms_percent)),
+            "{}",
+            a.label
+        );
+    }
+    assert_eq!(
+        json["ablations"].as_array().unwrap().len(),
+        study.ablations.len()
+    );
+    assert_eq!(
+        json["ablations"][1]["ihc"]["e_rms_percent"]
+            .as_f64()
+            .unwrap(),
+        creep_off.ihc.e_rms_percent
+    );
+    // The text names the configured hysteresis model.
+    assert!(html.contains("Preisach hysteresis (a smooth"));
+    assert!(!html.contains("Bouc-Wen hysteresis"));
+    // DIHC's sentence quotes the two fits.
+    assert!(html.contains(&format!(
+        "{:.3} % of the voltage range against {:.3} % of the position range",
+        exact.inverse.report.fit.rms_percent, exact.plant.report.fit.rms_percent
+    )));
+    // The paper pipeline's checks are shown but not counted; each matches its number.
+    assert_eq!(summary.informational.len(), 6);
+    let paper_dihc = paper.run("dihc").unwrap().indices.e_mhe_percent;
+    let check = summary
+        .informational
+        .iter()
+        .find(|c| c.what == "paper / dihc: e_mhe")
+        .unwrap();
+    assert_eq!(check.passed, paper_dihc <= 3.0);
+    assert!(html.contains("informational"));
+    assert!(!html.contains("the paper's (none"));
+    assert!(html.contains("no equivalent in the paper"));
 
     let Some(browser) = chromium() else {
         return;
@@ -111,6 +180,18 @@ fn default_study_meets_the_acceptance_bounds_and_writes_a_report_chromium_shows(
     assert_shows_table(w, h, &pixels);
 }
 
+/// Records the names of the steps the study announces.
+#[derive(Default)]
+struct Steps(Vec<String>);
+
+impl hystcomp_experiments::study::StudyObserver for Steps {
+    fn begin(&mut self, step: &str, _total: u64) {
+        self.0.push(step.to_string());
+    }
+    fn advance(&mut self, _done: u64) {}
+    fn end(&mut self) {}
+}
+
 #[test]
 fn the_study_is_deterministic_per_seed() {
     let quick = |seed: u64| {
@@ -120,7 +201,14 @@ fn the_study_is_deterministic_per_seed() {
             ..StudyOptions::default()
         };
         options.pso.iterations = 20;
-        summarize(&run_study(&options, &mut Silent).unwrap())
+        let mut steps = Steps::default();
+        let summary = summarize(&run_study(&options, &mut steps).unwrap());
+        // The command line's progress labels are 12 characters wide.
+        assert!(steps.0.len() >= 8, "{:?}", steps.0);
+        for step in &steps.0 {
+            assert!(step.chars().count() <= 12, "step label {step:?} too wide");
+        }
+        summary
     };
     let a = quick(5);
     let b = quick(5);
@@ -160,9 +248,55 @@ fn bad_options_are_refused_with_the_reason() {
     assert!(err(options).contains("damping_ratio"));
     assert!(
         err(StudyOptions {
+            periods: 21,
+            ..StudyOptions::default()
+        })
+        .contains("at most 20 periods")
+    );
+    assert!(
+        err(StudyOptions {
+            mhe_bins: 10_001,
+            ..StudyOptions::default()
+        })
+        .contains("use 1 to 10000 bins")
+    );
+    let mut options = StudyOptions::default();
+    options.stage.hysteresis.preisach.stroke_um = 30.0;
+    assert!(err(options).contains("cannot reach the trajectory"));
+    let mut options = StudyOptions::default();
+    options.stage.sensor.sensitivity_v_per_um = 0.2;
+    assert!(err(options).contains("sensor.sensitivity_v_per_um = 10 / 0.2"));
+    assert!(
+        err(StudyOptions {
             operators: 0,
             ..StudyOptions::default()
         })
         .contains("operators")
     );
+}
+
+#[test]
+fn ablations_follow_the_stage_configuration() {
+    // A Bouc-Wen stage without creep: "creep off" changes nothing and must reproduce the
+    // baseline exactly; the report names Bouc-Wen, not Preisach.
+    let mut options = StudyOptions::default();
+    options.pso.iterations = 20;
+    options.stage.hysteresis.model = hystcomp_stage::HysteresisModel::BoucWen;
+    options.stage.creep.percent_per_decade = 0.0;
+    let study = run_study(&options, &mut Silent).unwrap();
+    let creep_off = &study.ablations[1];
+    assert_eq!(creep_off.label, "creep off");
+    assert!(!creep_off.changed);
+    assert_eq!(creep_off.ihc, study.ablations[0].ihc);
+    let text: String = hystcomp_experiments::study_report::explanations(&study)
+        .iter()
+        .flat_map(|s| s.paragraphs.clone())
+        .collect::<Vec<_>>()
+        .join("\n");
+    assert!(
+        text.contains("asymmetric Bouc-Wen hysteresis (A = 0.40648"),
+        "{text}"
+    );
+    assert!(text.contains("already so in this stage"), "{text}");
+    assert!(!text.contains("Preisach"), "{text}");
 }

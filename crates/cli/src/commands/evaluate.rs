@@ -3,8 +3,8 @@
 use std::path::PathBuf;
 
 use hystcomp_experiments::TrackingIndices;
-use hystcomp_experiments::indices::DEFAULT_MHE_BINS;
-use hystcomp_io::data::{self, Column, Delimiter, Header, ReadOptions, RowRange};
+use hystcomp_experiments::indices::{DEFAULT_MHE_BINS, MIN_SAMPLES_PER_BIN, max_mhe_bins};
+use hystcomp_io::data::{self, Column, DataError, Delimiter, Header, ReadOptions, RowRange};
 use serde::Serialize;
 
 use crate::{CliError, Context};
@@ -21,13 +21,21 @@ pub struct Args {
     /// Column of y_d in the desired file, by name or 1-based index.
     #[arg(long, default_value = "2", value_name = "COLUMN")]
     desired_column: Column,
-    /// Column of y in the measured file, by name or 1-based index.
-    #[arg(long, default_value = "2", value_name = "COLUMN")]
-    measured_column: Column,
+    /// Column of y in the measured file, by name or 1-based index. Default: the column named
+    /// `measured_position_um` when the file has one (a `hystcomp simulate` output), else
+    /// column 2.
+    #[arg(long, value_name = "COLUMN")]
+    measured_column: Option<Column>,
+    /// Time column (s), by name or 1-based index, in both files: when given, the two files'
+    /// times must agree row by row (to 1 % of the time step), since the indices compare the
+    /// records sample by sample.
+    #[arg(long, value_name = "COLUMN")]
+    time_column: Option<Column>,
     /// Rows (samples) to evaluate, FIRST..LAST, 1-based and inclusive (e.g. the last period).
     #[arg(long, value_name = "FIRST..LAST")]
     rows: Option<RowRange>,
-    /// Number of bins of the y_d range for e_mhe (eq. (12), ERRATA item 6).
+    /// Number of bins of the y_d range for e_mhe (eq. (12), ERRATA item 6); at most one per
+    /// 10 samples evaluated, so that each bin holds enough samples for a width.
     #[arg(long, default_value_t = DEFAULT_MHE_BINS)]
     bins: usize,
     /// Field delimiter of both files: auto, comma, tab, semicolon or whitespace.
@@ -42,11 +50,61 @@ pub struct Args {
 struct Report {
     desired: String,
     measured: String,
+    /// The measured file's column that was read.
+    measured_column: String,
     samples: usize,
     /// Percent of the desired range.
     #[serde(flatten)]
     indices: TrackingIndices,
     desired_range: (f64, f64),
+}
+
+/// The name `hystcomp simulate` gives its measured position.
+const SIMULATE_MEASURED: &str = "measured_position_um";
+
+/// Reads `value` (and `time`, when given) from `path`.
+fn read(
+    path: &std::path::Path,
+    value: &Column,
+    time: Option<&Column>,
+    options: &ReadOptions,
+) -> Result<data::Columns, DataError> {
+    let mut columns = vec![value.clone()];
+    columns.extend(time.cloned());
+    data::read_columns(path, &columns, options)
+}
+
+/// Refuses two records whose times differ at some row by more than 1 % of the time step.
+fn check_times(desired: &data::Columns, measured: &data::Columns) -> Result<(), CliError> {
+    let (td, tm) = (&desired.values[1], &measured.values[1]);
+    let step = td
+        .windows(2)
+        .map(|w| (w[1] - w[0]).abs())
+        .fold(f64::INFINITY, f64::min);
+    let tolerance = if step.is_finite() && step > 0.0 {
+        0.01 * step
+    } else {
+        1e-9
+    };
+    if let Some(k) = td
+        .iter()
+        .zip(tm)
+        .position(|(a, b)| (a - b).abs() > tolerance)
+    {
+        return Err(CliError::input(format!(
+            "the times differ at sample {} (row {} of {}, row {} of {}): {} s against {} s; \
+             the indices compare the records sample by sample, so give records on the same \
+             time axis (or select matching rows with --rows)",
+            k + 1,
+            desired.file_row(k + 1),
+            desired.path.display(),
+            measured.file_row(k + 1),
+            measured.path.display(),
+            td[k],
+            tm[k]
+        )));
+    }
+    Ok(())
 }
 
 /// Runs `hystcomp evaluate`.
@@ -56,16 +114,23 @@ pub fn run(args: &Args, ctx: Context) -> Result<(), CliError> {
         header: args.header,
         rows: args.rows,
     };
-    let desired = data::read_columns(
-        &args.desired,
-        std::slice::from_ref(&args.desired_column),
-        &options,
-    )?;
-    let measured = data::read_columns(
-        &args.measured,
-        std::slice::from_ref(&args.measured_column),
-        &options,
-    )?;
+    let time = args.time_column.as_ref();
+    let desired = read(&args.desired, &args.desired_column, time, &options)?;
+    let measured = match &args.measured_column {
+        Some(column) => read(&args.measured, column, time, &options)?,
+        None => {
+            let named = Column::Name(SIMULATE_MEASURED.to_string());
+            match read(&args.measured, &named, time, &options) {
+                Err(DataError::NoSuchColumn { .. }) => {
+                    read(&args.measured, &Column::Index(2), time, &options)?
+                }
+                other => other?,
+            }
+        }
+    };
+    if time.is_some() && desired.len() == measured.len() {
+        check_times(&desired, &measured)?;
+    }
     let (d, y) = (&desired.values[0], &measured.values[0]);
     // The indices check the pair (equal lengths, a desired range that is not zero, bins).
     let indices = TrackingIndices::compute(d, y, args.bins).map_err(|e| {
@@ -75,6 +140,16 @@ pub fn run(args: &Args, ctx: Context) -> Result<(), CliError> {
             args.desired.display()
         ))
     })?;
+    if args.bins > max_mhe_bins(d.len()) {
+        return Err(CliError::input(format!(
+            "--bins {}: {} samples support at most {} e_mhe bins (at least {MIN_SAMPLES_PER_BIN} \
+             samples per bin on average; with fewer, bins hold one sample or none and e_mhe \
+             underestimates the loop); lower --bins or evaluate more rows",
+            args.bins,
+            d.len(),
+            max_mhe_bins(d.len())
+        )));
+    }
     let range = d
         .iter()
         .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &v| {
@@ -83,6 +158,7 @@ pub fn run(args: &Args, ctx: Context) -> Result<(), CliError> {
     let report = Report {
         desired: args.desired.display().to_string(),
         measured: args.measured.display().to_string(),
+        measured_column: measured.names[0].clone(),
         samples: d.len(),
         indices,
         desired_range: range,

@@ -3,7 +3,7 @@
 
 use std::path::PathBuf;
 
-use hystcomp_experiments::study::StudyObserver;
+use hystcomp_experiments::study::{MAX_STUDY_PERIODS, STUDY_PSO_ITERATIONS, StudyObserver};
 use hystcomp_experiments::{RunMeta, StudyOptions, run_study, summarize, write_outputs};
 use hystcomp_stage::StageConfig;
 use serde::Serialize;
@@ -24,13 +24,13 @@ pub struct Args {
     /// particle swarm.
     #[arg(long, default_value_t = 1)]
     seed: u64,
-    /// Particle swarm iterations of the `paper` pipeline.
-    #[arg(long, default_value_t = hystcomp_experiments::study::STUDY_PSO_ITERATIONS)]
+    /// Particle swarm iterations of the `paper` pipeline (1 to 100000).
+    #[arg(long, default_value_t = STUDY_PSO_ITERATIONS)]
     pso_iterations: usize,
-    /// Particles of the `paper` pipeline's swarm.
+    /// Particles of the `paper` pipeline's swarm (2 to 1000).
     #[arg(long, default_value_t = 40)]
     pso_particles: usize,
-    /// Periods of the paper's trajectory to track (10 s each; indices on the last).
+    /// Periods of the paper's trajectory to track (10 s each; indices on the last; 2 to 20).
     #[arg(long, default_value_t = 2)]
     periods: usize,
 }
@@ -74,10 +74,47 @@ fn now_rfc3339() -> String {
     humantime::format_rfc3339_seconds(std::time::SystemTime::now()).to_string()
 }
 
+/// Most particle swarm iterations `--pso-iterations` accepts.
+const MAX_PSO_ITERATIONS: usize = 100_000;
+/// Most particles `--pso-particles` accepts.
+const MAX_PSO_PARTICLES: usize = 1_000;
+
+/// Refuses options the study cannot use, with the flag named and the accepted range.
+fn check_args(args: &Args) -> Result<(), CliError> {
+    if !(2..=MAX_STUDY_PERIODS).contains(&args.periods) {
+        return Err(CliError::input(format!(
+            "--periods {}: give 2 to {MAX_STUDY_PERIODS} periods (the indices use the last full \
+             one, so the default 2 is enough; each period adds 10 s of simulation to every \
+             tracking run)",
+            args.periods
+        )));
+    }
+    if !(1..=MAX_PSO_ITERATIONS).contains(&args.pso_iterations) {
+        return Err(CliError::input(format!(
+            "--pso-iterations {}: give 1 to {MAX_PSO_ITERATIONS} iterations (the study's \
+             default is {STUDY_PSO_ITERATIONS})",
+            args.pso_iterations
+        )));
+    }
+    if !(2..=MAX_PSO_PARTICLES).contains(&args.pso_particles) {
+        return Err(CliError::input(format!(
+            "--pso-particles {}: give 2 to {MAX_PSO_PARTICLES} particles (the study's default \
+             is 40)",
+            args.pso_particles
+        )));
+    }
+    Ok(())
+}
+
 /// Runs `hystcomp reproduce`.
 pub fn run(args: &Args, ctx: Context) -> Result<(), CliError> {
+    check_args(args)?;
     let stage = match &args.stage {
-        Some(path) => StageConfig::from_toml_file(path)?,
+        Some(path) => StageConfig::from_toml_file(path).map_err(|e| match e {
+            // An unreadable stage file already names itself.
+            hystcomp_stage::StageError::Io { .. } => CliError::input(e.to_string()),
+            _ => CliError::input(e.to_string()).context(path.display()),
+        })?,
         None => StageConfig::default(),
     };
     let mut options = StudyOptions {
@@ -109,7 +146,7 @@ pub fn run(args: &Args, ctx: Context) -> Result<(), CliError> {
     } else {
         print!("{summary}");
         println!(
-            "report: {} (figures, models/ and study.json beside it); {:.1} s",
+            "report: {} (figures, models/ and study.json beside it); study computed in {:.1} s",
             files.report.display(),
             study.elapsed_s
         );

@@ -115,6 +115,7 @@ fn summary(
         "clamped": {
             "dac": response.clamps.dac_clamped,
             "amplifier": response.clamps.amplifier_clamped,
+            "adc": response.clamps.adc_clamped,
         },
     })
 }
@@ -182,6 +183,20 @@ pub fn run(args: &Args, ctx: Context) -> Result<(), CliError> {
                 config.amplifier.output_max_v
             );
         }
+    }
+    if response.clamps.adc_clamped > 0 {
+        // On stderr in both modes: the measured positions in the output file are wrong there.
+        eprintln!(
+            "warning: {} samples of the sensor reading lay outside the ADC's span ({}..{} V, \
+             i.e. {:.2}..{:.2} um at sensor.sensitivity_v_per_um = {}): measured_position_um \
+             is saturated there; widen adc.min_v/adc.max_v or lower the sensitivity",
+            response.clamps.adc_clamped,
+            config.adc.min_v,
+            config.adc.max_v,
+            config.adc.min_v / config.sensor.sensitivity_v_per_um,
+            config.adc.max_v / config.sensor.sensitivity_v_per_um,
+            config.sensor.sensitivity_v_per_um
+        );
     }
     Ok(())
 }
