@@ -23,14 +23,14 @@ pub const AUTO_WARMUP_LEVEL: f64 = 0.05;
 /// The smallest Pearson correlation between the voltage and the displacement over the fitted
 /// samples that [`crate::identify`] accepts. A piezo actuator's displacement rises with its
 /// voltage: even with a 15-20 % hysteresis loop, creep and sensor noise the correlation of
-/// real records is above 0.95 (0.998 on the DBO record), and a linear fit alone leaves a few
+/// real records is above 0.95 (0.978 on the DBO record), and a linear fit alone leaves several
 /// % RMS error. Below 0.5 the displacement does not follow the voltage: a wrong column, a
 /// wrong sign, a column of noise. The MPIM would still be fitted (its weights can take any
 /// sign) with a meaningless, tens-of-% error.
 pub const MIN_CORRELATION: f64 = 0.5;
 
 /// The default largest RMS fit error accepted, in % of the fitted output range. A linear
-/// model alone leaves about 3-5 % on piezo hysteresis (the loop is 10-15 % wide), an MPIM
+/// model alone leaves about 3-8 % on piezo hysteresis (7.3 % on the DBO record), an MPIM
 /// well under 1 %; an RMS above 10 % means the data or the options are wrong (an output
 /// offset far off the data, a record that is not a hysteresis loop...). See
 /// [`IdentifyOptions::max_fit_rms_percent`].
@@ -130,7 +130,8 @@ pub enum Warmup {
 /// constant term: from zero memory at normalised input 0 it outputs 0. A sensor offset must
 /// therefore be removed before the fit, or fitted.
 ///
-/// In every case the output scale is `y_max - y_min` of the record, and the model file's
+/// In every case the output scale is `y_max - y_min` over the fitted samples (neither the
+/// warm-up nor the hold-out), and the model file's
 /// `output.offset` is the physical output the model's normalised output 0 stands for.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, Default)]
 #[serde(rename_all = "snake_case")]
@@ -173,7 +174,8 @@ pub struct IdentifyOptions {
     /// Samples at the start excluded from the fit.
     pub warmup: Warmup,
     /// The fraction of the samples after the warm-up, at the end of the record, held out of
-    /// the fit and reported separately, in `[0, 1)`.
+    /// the fit and reported separately, in `[0, 1)`. The held-out samples inform nothing:
+    /// not the parameters, nor the normalisation ranges (they may fall outside them).
     pub holdout: f64,
     /// The output offset.
     pub offset: OutputOffset,

@@ -65,9 +65,9 @@ pub struct SignalRange {
     pub quantity: String,
     /// Its unit.
     pub unit: String,
-    /// Smallest value of the record.
+    /// Smallest value over the fitted samples (warm-up and hold-out excluded).
     pub min: f64,
-    /// Largest value of the record.
+    /// Largest value over the fitted samples.
     pub max: f64,
 }
 
