@@ -519,7 +519,25 @@ fn missing_unreadable_and_invalid_files_are_refused_with_the_path() {
     );
 
     let directory = CString::new(env!("CARGO_MANIFEST_DIR")).unwrap();
-    assert_eq!(from_file(&directory, "ihc", None).unwrap_err().0, IO);
+    let (status, message) = from_file(&directory, "ihc", None).unwrap_err();
+    assert_eq!(status, IO);
+    assert!(
+        message.contains(env!("CARGO_MANIFEST_DIR")) && message.contains("is a directory"),
+        "{message}"
+    );
+    // The forward model refuses it alike.
+    let mut model = null_mut();
+    // SAFETY: a valid string and out-pointer.
+    assert_eq!(
+        unsafe { hystcomp_mpim_from_model_file(directory.as_ptr(), &mut model) },
+        IO
+    );
+    assert!(model.is_null());
+    // SAFETY: the message is a NUL-terminated string owned by the library.
+    let message = unsafe { CStr::from_ptr(hystcomp_last_error_message()) }
+        .to_string_lossy()
+        .into_owned();
+    assert!(message.contains("is a directory"), "{message}");
 
     let dir = tempfile::tempdir().unwrap();
     let garbage = dir.path().join("garbage.json");

@@ -118,7 +118,9 @@ fn c_round_trip_through_table1_model_is_exact() {
     assert_eq!(errors.len(), 2, "{stdout}");
     assert!(errors.iter().all(|e| *e < 1e-9), "{errors:?}");
     assert!(
-        stdout.contains("missing file: file could not be read: no-such-model.json"),
+        stdout.contains(
+            "missing file: file could not be read: cannot read no-such-model.json: No such file"
+        ),
         "{stdout}"
     );
     assert!(
@@ -151,4 +153,84 @@ fn c_example_without_arguments_prints_its_usage() {
         .expect("the example runs");
     assert_eq!(output.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&output.stderr).contains("usage:"));
+}
+
+/// The ```sh block of the README's "### C" subsection, one command per line.
+fn readme_c_commands() -> Vec<String> {
+    let readme = std::fs::read_to_string(workspace_root().join("README.md")).unwrap();
+    let section = readme
+        .split("\n### C\n")
+        .nth(1)
+        .and_then(|rest| rest.split("\n### ").next())
+        .expect("the README has a ### C subsection");
+    section
+        .split("```sh\n")
+        .nth(1)
+        .and_then(|rest| rest.split("```").next())
+        .expect("the C subsection has a ```sh block")
+        .lines()
+        .map(str::to_owned)
+        .collect()
+}
+
+#[test]
+fn readme_c_build_commands_work_from_the_repository_root() {
+    let commands = readme_c_commands();
+    assert_eq!(commands[0], "cargo build --release -p hystcomp-c");
+    assert_eq!(commands.len(), 3, "{commands:?}");
+    // The gcc line as written, with the library of this (debug) build instead of the release
+    // one and the executable in the target directory; every other path is the README's,
+    // relative to the repository's root.
+    let release = "target/release/libhystcomp.a";
+    let gcc: Vec<&str> = commands[1].split_whitespace().collect();
+    assert_eq!(gcc[0], "gcc");
+    assert!(
+        gcc.contains(&release) && gcc.contains(&"examples/c/minimal.c"),
+        "{gcc:?}"
+    );
+    let output_at = gcc.iter().position(|a| *a == "-o").expect("gcc -o NAME");
+    assert_eq!(commands[2], format!("./{}", gcc[output_at + 1]));
+    let program = target_dir().join("c-examples").join("readme-minimal");
+    std::fs::create_dir_all(program.parent().unwrap()).unwrap();
+    let library = static_library();
+    let args: Vec<std::ffi::OsString> = gcc[1..]
+        .iter()
+        .enumerate()
+        .map(|(i, a)| match *a {
+            a if a == release => library.clone().into_os_string(),
+            _ if i == output_at => program.clone().into_os_string(),
+            a => a.into(),
+        })
+        .collect();
+    run(
+        Command::new("gcc")
+            .current_dir(workspace_root())
+            .args(&args),
+        "the README's gcc line must work from the repository's root",
+    );
+    let output = run(
+        Command::new(&program).current_dir(workspace_root()),
+        "the README's C example must run from the repository's root",
+    );
+    assert!(String::from_utf8_lossy(&output.stdout).ends_with(" V -> 40.000000 um\n"));
+}
+
+#[test]
+fn makefile_builds_and_runs_both_examples() {
+    assert!(available("make"), "make is needed (apt-get install make)");
+    static_library();
+    let out = target_dir().join("c-examples").join("make");
+    let _ = std::fs::remove_dir_all(&out);
+    let output = run(
+        Command::new("make")
+            .args(["-C", "examples/c", "run"])
+            .arg(format!("OUT={}", out.display()))
+            .env("CARGO_TARGET_DIR", target_dir())
+            .current_dir(workspace_root()),
+        "make -C examples/c run must build and run both examples",
+    );
+    assert!(out.join("minimal").is_file() && out.join("round_trip").is_file());
+    let stdout = String::from_utf8_lossy(&output.stdout);
+    assert!(stdout.contains(" V -> 40.000000 um"), "{stdout}");
+    assert!(stdout.contains("round trip OK"), "{stdout}");
 }

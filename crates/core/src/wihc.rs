@@ -1,6 +1,7 @@
 //! Without-inverse hysteresis compensation (WIHC), eq. (9).
 
 use crate::compensator::OutputGuard;
+use crate::invertibility::max_delayed_loop_gain;
 use crate::solve::increasing_cubic_root;
 use crate::walk::{PlayBank, SegmentEquation};
 use crate::{
@@ -42,8 +43,6 @@ pub struct Wihc<T: Real, B: Buffer<T>> {
     inverse_a2: T,
     mode: SolveMode,
     guard: OutputGuard<T>,
-    /// The worst-case loop gain of the delayed iteration over the limits.
-    loop_gain: LoopGain<T>,
 }
 
 impl<T: Real, B: Buffer<T>> Wihc<T, B> {
@@ -64,14 +63,12 @@ impl<T: Real, B: Buffer<T>> Wihc<T, B> {
         if mode == SolveMode::Delayed {
             check_delayed_contraction(plant, limits)?;
         }
-        let loop_gain = plant.delayed_wihc_loop_gain(limits.min(), limits.max())?;
         let mut wihc = Wihc {
             bank: PlayBank::new(a2, plant.thresholds(), plant.weights())?,
             a1,
             inverse_a2: T::one() / a2,
             mode,
             guard: OutputGuard::new(limits),
-            loop_gain,
         };
         wihc.reset();
         Ok(wihc)
@@ -88,7 +85,17 @@ impl<T: Real, B: Buffer<T>> Wihc<T, B> {
     /// choose: below 1 the delayed loop settles after any jump in `y_d`; at or above 1 prefer
     /// [`SolveMode::Exact`]. Table 1 of the paper on `[0, 1]`: 1.66.
     pub fn delayed_loop_gain(&self) -> LoopGain<T> {
-        self.loop_gain
+        // Computed on demand (a few checkpoints per operator), so that the compensator keeps
+        // no more RAM than it needs per sample.
+        let limits = self.guard.limits;
+        max_delayed_loop_gain(
+            self.bank.thresholds(),
+            self.bank.weights(),
+            self.a1,
+            self.bank.a(),
+            limits.min(),
+            limits.max(),
+        )
     }
 
     /// The plant model's operators' memory as the compensator tracks it (the memory of

@@ -164,7 +164,7 @@ impl fmt::Display for ModelFileError {
                 } else if source.kind() == std::io::ErrorKind::NotFound {
                     write!(
                         f,
-                        "cannot read {path}: no such file (check the path and file name)"
+                        "cannot read {path}: {source} (check the path and file name)"
                     )
                 } else if source.kind() == std::io::ErrorKind::InvalidData {
                     write!(
