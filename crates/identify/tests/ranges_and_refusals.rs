@@ -351,3 +351,45 @@ fn crossval_needs_enough_test_samples() {
         }
     }
 }
+
+/// One observer watches both identifications of a cross-validation; each is announced, so
+/// that a progress bar can label them (plant, then inverse), and each reports its iterations.
+#[test]
+fn crossval_announces_each_identification_to_its_observer() {
+    struct Log(Vec<String>);
+    impl hystcomp_identify::Observer for Log {
+        fn observe(&mut self, progress: &hystcomp_identify::Progress) {
+            if progress.iteration == progress.iterations {
+                self.0.push(format!("done {}", progress.iterations));
+            }
+        }
+        fn begin(&mut self, label: &str) {
+            self.0.push(label.to_owned());
+        }
+    }
+    let (voltage, displacement) = plant_record(9);
+    let record = Record {
+        voltage: &voltage,
+        displacement: &displacement,
+    };
+    let options = CrossvalOptions {
+        identify: IdentifyOptions {
+            method: hystcomp_identify::Method::ParticleSwarm(
+                hystcomp_identify::PsoOptions::default()
+                    .with_iterations(5)
+                    .unwrap()
+                    .with_polish(true),
+            ),
+            ..IdentifyOptions::default()
+        },
+        ..CrossvalOptions::default()
+    };
+    let mut log = Log(Vec::new());
+    crossval(record, record, &options, &mut log).unwrap();
+    assert_eq!(
+        log.0,
+        ["plant model", "done 5", "inverse model", "done 5"],
+        "{:?}",
+        log.0
+    );
+}
