@@ -29,6 +29,8 @@ use std::path::{Path, PathBuf};
 use std::sync::OnceLock;
 
 use plotters::coord::Shift;
+use plotters::coord::ranged1d::ValueFormatter;
+use plotters::coord::types::RangedCoordf64;
 use plotters::element::DashedPathElement;
 use plotters::prelude::*;
 use plotters::style::text_anchor::{HPos, Pos, VPos};
@@ -95,6 +97,13 @@ pub enum FigureError {
         /// Title of the panel.
         panel: String,
     },
+    /// A series of a panel with a logarithmic vertical axis has a `y` <= 0.
+    NotPositive {
+        /// Label of the series.
+        series: String,
+        /// 0-based index of the first bad sample.
+        index: usize,
+    },
     /// Fewer than two points asked of [`decimate_min_max`].
     TooFewPoints(usize),
     /// The file stem is empty or not a plain file name.
@@ -148,6 +157,11 @@ impl fmt::Display for FigureError {
                 f,
                 "the data of the panel {panel:?} spans a range too wide to draw \
                  (its width overflows f64)"
+            ),
+            FigureError::NotPositive { series, index } => write!(
+                f,
+                "series {series:?} has a value <= 0 at sample {index} (0-based), which a \
+                 logarithmic axis cannot show"
             ),
             FigureError::TooFewPoints(n) => {
                 write!(f, "decimation to {n} point(s) asked; ask for at least 2")
@@ -228,6 +242,8 @@ pub struct Panel<'a> {
     pub notes: Vec<&'a str>,
     /// At most this many points are drawn per series (see [`decimate_min_max`]).
     pub max_points: usize,
+    /// A logarithmic vertical axis (every `y` must then be > 0).
+    pub log_y: bool,
 }
 
 impl<'a> Panel<'a> {
@@ -243,6 +259,7 @@ impl<'a> Panel<'a> {
             kind: PanelKind::Map { diagonal },
             notes: Vec::new(),
             max_points: DEFAULT_MAX_POINTS,
+            log_y: false,
         }
     }
 
@@ -257,6 +274,7 @@ impl<'a> Panel<'a> {
             kind: PanelKind::TimeSeries,
             notes: Vec::new(),
             max_points: DEFAULT_MAX_POINTS,
+            log_y: false,
         }
     }
 
@@ -269,6 +287,12 @@ impl<'a> Panel<'a> {
     /// Adds a note line (builder style).
     pub fn with_note(mut self, note: &'a str) -> Self {
         self.notes.push(note);
+        self
+    }
+
+    /// Makes the vertical axis logarithmic (builder style); every `y` must be > 0.
+    pub fn with_log_y(mut self) -> Self {
+        self.log_y = true;
         self
     }
 
@@ -470,6 +494,14 @@ fn prepare<'a>(panel: &'a Panel<'a>, plot_px: f64) -> Result<PreparedPanel<'a>, 
     let mut points = Vec::with_capacity(panel.series.len());
     for s in &panel.series {
         validate_series(s)?;
+        if panel.log_y {
+            if let Some(index) = s.y.iter().position(|&y| y <= 0.0) {
+                return Err(FigureError::NotPositive {
+                    series: s.label.to_string(),
+                    index,
+                });
+            }
+        }
         let kept = decimate_min_max_indices(s.y, panel.max_points)?;
         points.push(
             kept.into_iter()
@@ -484,7 +516,14 @@ fn prepare<'a>(panel: &'a Panel<'a>, plot_px: f64) -> Result<PreparedPanel<'a>, 
     };
     // Ranges from the full data, not the decimated points (the x extremes may fall between).
     let x_span = span(&mut panel.series.iter().flat_map(|s| s.x.iter().copied()));
-    let y_span = span(&mut panel.series.iter().flat_map(|s| s.y.iter().copied()));
+    // A logarithmic axis is laid out in log10(y) and converted back at the end.
+    let to_axis = |y: f64| if panel.log_y { y.log10() } else { y };
+    let y_span = span(
+        &mut panel
+            .series
+            .iter()
+            .flat_map(|s| s.y.iter().copied().map(to_axis)),
+    );
     let too_wide = || FigureError::RangeTooWide {
         panel: panel.title.to_string(),
     };
@@ -516,6 +555,11 @@ fn prepare<'a>(panel: &'a Panel<'a>, plot_px: f64) -> Result<PreparedPanel<'a>, 
             }
             (x, y)
         }
+    };
+    let y_range = if panel.log_y {
+        (10f64.powf(y_range.0), 10f64.powf(y_range.1))
+    } else {
+        y_range
     };
     Ok(PreparedPanel {
         panel,
@@ -715,15 +759,37 @@ fn draw_panel<DB: DrawingBackend>(
     let panel = prepared.panel;
     let (x0, x1) = prepared.x_range;
     let (y0, y1) = prepared.y_range;
-    let mut chart = ChartBuilder::on(area)
+    let mut builder = ChartBuilder::on(area);
+    builder
         .margin(PANEL_MARGIN_PX)
         .margin_right(2 * PANEL_MARGIN_PX)
         .caption(panel.title, (FONT_FAMILY, TITLE_FONT_PX))
         .x_label_area_size(X_LABEL_AREA_PX)
-        .y_label_area_size(92)
-        .build_cartesian_2d(x0..x1, y0..y1)
-        .map_err(drawing_error)?;
+        .y_label_area_size(92);
+    if panel.log_y {
+        let chart = builder
+            .build_cartesian_2d(x0..x1, (y0..y1).log_scale())
+            .map_err(drawing_error)?;
+        draw_chart(chart, prepared)
+    } else {
+        let chart = builder
+            .build_cartesian_2d(x0..x1, y0..y1)
+            .map_err(drawing_error)?;
+        draw_chart(chart, prepared)
+    }
+}
 
+/// Draws the mesh, the series, the legend and the notes of a panel on its chart.
+fn draw_chart<'a, DB, Y>(
+    mut chart: ChartContext<'a, DB, Cartesian2d<RangedCoordf64, Y>>,
+    prepared: &PreparedPanel<'_>,
+) -> Result<(), FigureError>
+where
+    DB: DrawingBackend + 'a,
+    Y: Ranged<ValueType = f64> + ValueFormatter<f64>,
+{
+    let panel = prepared.panel;
+    let (x0, x1) = prepared.x_range;
     chart
         .configure_mesh()
         .x_desc(panel.x_label)

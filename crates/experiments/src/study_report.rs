@@ -806,7 +806,7 @@ pub fn write_outputs(
     let start = study.evaluation_start;
     let desired_eval = &study.desired_um[start..];
     let time = &study.time_s;
-    let total = 3 + 2 * 3 + 2 * 2;
+    let total = 3 + 2 * 3 + 2 * 3;
     observer.begin("figures", total);
     let mut log = FigureLog {
         entries: Vec::new(),
@@ -839,32 +839,52 @@ pub fn write_outputs(
     if let (Some(paper), Some(exact)) = (study.pipeline("paper"), study.pipeline("exact")) {
         let [plant, inverse] = &paper.convergence;
         if !plant.is_empty() && !inverse.is_empty() {
-            // From iteration 20 on: the first few start orders of magnitude higher.
-            let skip = 19.min(plant.len() - 1).min(inverse.len() - 1);
-            let (plant, inverse) = (&plant[skip..], &inverse[skip..]);
-            let iterations: Vec<f64> = (skip + 1..=skip + plant.len()).map(|i| i as f64).collect();
-            let ends = [(skip + 1) as f64, (skip + plant.len()) as f64];
+            // From the first iteration, on a logarithmic axis (the first iterations start
+            // orders of magnitude above the optimum).
+            let iterations: Vec<f64> = (1..=plant.len().max(inverse.len()))
+                .map(|i| i as f64)
+                .collect();
+            let ends = [1.0, plant.len().max(inverse.len()) as f64];
             let ls_plant = [exact.plant.report.fit.rms_percent; 2];
             let ls_inverse = [exact.inverse.report.fit.rms_percent; 2];
-            let panel = Panel::time_series(
-                "Particle swarm: best fit error against iteration",
+            // A logarithmic axis needs positive values (a perfect fit would be 0).
+            let log_axis = plant
+                .iter()
+                .chain(inverse)
+                .chain(&ls_plant)
+                .chain(&ls_inverse)
+                .all(|&v| v > 0.0);
+            let mut panel = Panel::time_series(
+                "Particle swarm (paper pipeline): best fit error against iteration",
                 "RMS fit error (% of the output range)",
             )
-            .with_axis_labels("iteration", "RMS fit error (% of the output range)")
-            .with_series("PSO, plant model", &iterations, plant)
-            .with_series(
-                "PSO, inverse model",
-                &iterations[..inverse.len().min(iterations.len())],
-                &inverse[..inverse.len().min(iterations.len())],
-            )
-            .with_series("least squares, plant model", &ends, &ls_plant)
-            .with_series("least squares, inverse model", &ends, &ls_inverse);
+            .with_axis_labels(
+                "iteration",
+                if log_axis {
+                    "RMS fit error (% of the output range, log scale)"
+                } else {
+                    "RMS fit error (% of the output range)"
+                },
+            );
+            if log_axis {
+                panel = panel.with_log_y();
+            }
+            let panel = panel
+                .with_series("PSO, plant model", &iterations[..plant.len()], plant)
+                .with_series(
+                    "PSO, inverse model",
+                    &iterations[..inverse.len().min(iterations.len())],
+                    &inverse[..inverse.len().min(iterations.len())],
+                )
+                .with_series("least squares, plant model", &ends, &ls_plant)
+                .with_series("least squares, inverse model", &ends, &ls_inverse);
             let files = figures::write_panel_figure(dir, "fig01_pso_convergence", &panel)?;
             log.record(
                 files,
                 String::new(),
                 "Identification: the particle swarm's best RMS fit error after each iteration \
-                 (from the 20th), against the least-squares optimum for the same thresholds."
+                 (logarithmic axis), against the least-squares optimum for the same thresholds \
+                 (the exact pipeline's models)."
                     .into(),
             );
             convergence_drawn = true;
@@ -943,22 +963,53 @@ pub fn write_outputs(
     }
     // Figs. 11 and 12, per pipeline.
     for pipeline in study.pipelines.iter().rev() {
-        let labels: Vec<String> = ["IHC", "WIHC", "DIHC"]
-            .iter()
-            .zip(&pipeline.runs)
-            .map(|(f, r)| format!("{f} (e_rms {:.2} %)", r.indices.e_rms_percent))
-            .collect();
-        let mut panel = Panel::time_series(
-            "Tracking errors of the three approaches",
-            LABEL_TRACKING_ERROR,
-        );
         let errors_um: Vec<Vec<f64>> = pipeline
             .runs
             .iter()
             .map(|run| tracking_error(run, &study.desired_um))
             .collect();
-        for (label, error_um) in labels.iter().zip(&errors_um) {
-            panel = panel.with_series(label, &time[start..], &error_um[start..]);
+        // IHC and WIHC often track alike: say so rather than hide one curve under the other.
+        let ihc_wihc_gap_um = errors_um[0][start..]
+            .iter()
+            .zip(&errors_um[1][start..])
+            .map(|(a, b)| (a - b).abs())
+            .fold(0.0, f64::max);
+        let error_span_um = errors_um[0][start..]
+            .iter()
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), &e| {
+                (lo.min(e), hi.max(e))
+            });
+        let overlap = ihc_wihc_gap_um <= 0.05 * (error_span_um.1 - error_span_um.0);
+        let identical = ihc_wihc_gap_um == 0.0;
+        let overlap_note =
+            format!("IHC and WIHC differ by at most {ihc_wihc_gap_um:.4} µm: their curves overlap");
+        let families = ["IHC", "WIHC", "DIHC"];
+        let label = |k: usize, index: &str, value: f64| {
+            if identical && k == 0 {
+                format!("IHC = WIHC (identical runs; {index} {value:.2} %)")
+            } else {
+                format!("{} ({index} {value:.2} %)", families[k])
+            }
+        };
+        // The series drawn: WIHC is left out when it is identical to IHC (the legend says so).
+        let drawn: Vec<usize> = (0..pipeline.runs.len())
+            .filter(|&k| !(identical && k == 1))
+            .collect();
+
+        let title = format!(
+            "Tracking errors of the three approaches ({} pipeline)",
+            pipeline.name
+        );
+        let labels: Vec<String> = drawn
+            .iter()
+            .map(|&k| label(k, "e_rms", pipeline.runs[k].indices.e_rms_percent))
+            .collect();
+        let mut panel = Panel::time_series(&title, LABEL_TRACKING_ERROR);
+        for (label, &k) in labels.iter().zip(&drawn) {
+            panel = panel.with_series(label, &time[start..], &errors_um[k][start..]);
+        }
+        if overlap && !identical {
+            panel = panel.with_note(&overlap_note);
         }
         let stem = format!("fig11_{}_errors", pipeline.name);
         let files = figures::write_panel_figure(dir, &stem, &panel)?;
@@ -967,20 +1018,31 @@ pub fn write_outputs(
             "Fig. 11".into(),
             format!(
                 "Comparison of the tracking errors of IHC, WIHC and DIHC in the {} pipeline, \
-                 last full period.",
-                pipeline.name
+                 last full period.{}",
+                pipeline.name,
+                if identical {
+                    " IHC and WIHC give identical runs here, drawn once."
+                } else if overlap {
+                    " IHC and WIHC overlap (see the note in the figure)."
+                } else {
+                    ""
+                }
             ),
         );
 
-        let labels: Vec<String> = ["IHC", "WIHC", "DIHC"]
+        // The paper's way: y against y_d, three loops on the diagonal.
+        let title = format!(
+            "Resulting hysteresis of the three approaches ({} pipeline)",
+            pipeline.name
+        );
+        let labels: Vec<String> = drawn
             .iter()
-            .zip(&pipeline.runs)
-            .map(|(f, r)| format!("{f} (e_mhe {:.2} %)", r.indices.e_mhe_percent))
+            .map(|&k| label(k, "e_mhe", pipeline.runs[k].indices.e_mhe_percent))
             .collect();
-        let mut panel = Panel::map("Resulting hysteresis of the three approaches", true)
+        let mut panel = Panel::map(&title, true)
             .with_axis_labels(LABEL_DESIRED_POSITION, LABEL_ACTUAL_POSITION);
-        for (label, run) in labels.iter().zip(&pipeline.runs) {
-            panel = panel.with_series(label, desired_eval, &run.measured_um[start..]);
+        for (label, &k) in labels.iter().zip(&drawn) {
+            panel = panel.with_series(label, desired_eval, &pipeline.runs[k].measured_um[start..]);
         }
         let stem = format!("fig12_{}_hysteresis", pipeline.name);
         let files = figures::write_panel_figure(dir, &stem, &panel)?;
@@ -989,7 +1051,34 @@ pub fn write_outputs(
             "Fig. 12".into(),
             format!(
                 "Comparison of the resulting hysteresis (actual against desired position, last \
-                 full period) in the {} pipeline.",
+                 full period) in the {} pipeline, drawn as the paper does: at this scale the \
+                 remaining loops are hidden by the diagonal; the next figure shows them.",
+                pipeline.name
+            ),
+        );
+
+        // The readable way: the error y - y_d against y_d, where the residual loops show.
+        let title = format!(
+            "Resulting hysteresis: error against desired position ({} pipeline)",
+            pipeline.name
+        );
+        let mut panel = Panel::map(&title, false)
+            .with_axis_labels(LABEL_DESIRED_POSITION, LABEL_TRACKING_ERROR);
+        for (label, &k) in labels.iter().zip(&drawn) {
+            panel = panel.with_series(label, desired_eval, &errors_um[k][start..]);
+        }
+        if overlap && !identical {
+            panel = panel.with_note(&overlap_note);
+        }
+        let stem = format!("fig12_{}_hysteresis_error", pipeline.name);
+        let files = figures::write_panel_figure(dir, &stem, &panel)?;
+        log.record(
+            files,
+            "Fig. 12, redrawn".into(),
+            format!(
+                "The resulting hysteresis of the {} pipeline made visible: the tracking error \
+                 y - y_d against y_d over the last full period. The vertical width of each loop \
+                 is what e_mhe measures.",
                 pipeline.name
             ),
         );

@@ -369,6 +369,24 @@ fn constant_and_single_sample_series_are_drawn() {
 }
 
 #[test]
+fn a_logarithmic_axis_spans_decades_with_round_ticks() {
+    let dir = tempfile::tempdir().unwrap();
+    let t: Vec<f64> = (1..=1000).map(|i| i as f64).collect();
+    let y: Vec<f64> = t.iter().map(|i| 100.0 / i).collect();
+    let panel = Panel::time_series("decay", "error (%)")
+        .with_log_y()
+        .with_series("1/t", &t, &y);
+    let files = figures::write_panel_figure(dir.path(), "log", &panel).unwrap();
+    let svg = std::fs::read_to_string(&files.svg).unwrap();
+    let texts: Vec<&str> = svg.lines().map(str::trim).collect();
+    // Ticks at the decades between 0.1 and 100: a linear axis from 0.1 to 100 would not
+    // label 0.1, 1 and 10 all three.
+    for tick in ["0.1", "1", "10", "100"] {
+        assert!(texts.contains(&tick), "no tick {tick} in the SVG");
+    }
+}
+
+#[test]
 fn bad_data_gives_errors_and_writes_nothing() {
     let dir = tempfile::tempdir().unwrap();
     let good = [0.0, 1.0, 2.0];
@@ -399,6 +417,12 @@ fn bad_data_gives_errors_and_writes_nothing() {
             "too wide",
             Panel::map("wide", false).with_series("w", &[-f64::MAX, f64::MAX], &good[..2]),
         ),
+        (
+            "log of zero",
+            Panel::time_series("log", LABEL_POSITION)
+                .with_log_y()
+                .with_series("z", &good, &good),
+        ),
     ];
     for (what, panel) in &cases {
         let err = figures::write_panel_figure(dir.path(), "bad", panel).unwrap_err();
@@ -428,7 +452,8 @@ fn bad_data_gives_errors_and_writes_nothing() {
                     x_len: 3, y_len: 2, ..
                 },
             )
-            | ("too wide", FigureError::RangeTooWide { .. }) => {}
+            | ("too wide", FigureError::RangeTooWide { .. })
+            | ("log of zero", FigureError::NotPositive { index: 0, .. }) => {}
             _ => panic!("{what}: unexpected error {err:?}"),
         }
     }

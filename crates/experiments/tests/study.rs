@@ -58,7 +58,24 @@ fn default_study_meets_the_acceptance_bounds_and_writes_a_report_chromium_shows(
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("report");
     let files = write_outputs(&study, &out, &meta(), &mut Silent).unwrap();
-    assert_eq!(files.figures.len(), 2 * 13);
+    assert_eq!(files.figures.len(), 2 * 15);
+    // Every figure of a pipeline names it in its title; fig. 12 has a readable twin.
+    for pipeline in ["exact", "paper"] {
+        for stem in [
+            format!("fig08_{pipeline}_ihc"),
+            format!("fig11_{pipeline}_errors"),
+            format!("fig12_{pipeline}_hysteresis"),
+            format!("fig12_{pipeline}_hysteresis_error"),
+        ] {
+            let svg = std::fs::read_to_string(out.join(format!("{stem}.svg"))).unwrap();
+            assert!(svg.contains(&format!("{pipeline} pipeline")), "{stem}");
+        }
+    }
+    let fig11 = std::fs::read_to_string(out.join("fig11_exact_errors.svg")).unwrap();
+    assert!(
+        fig11.contains("IHC = WIHC") || fig11.contains("IHC and WIHC differ by at most"),
+        "fig. 11 must not hide IHC under WIHC silently"
+    );
     for f in &files.figures {
         assert!(
             std::fs::metadata(f).unwrap().len() > 1000,
