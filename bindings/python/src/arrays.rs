@@ -1,17 +1,101 @@
 //! numpy arrays in and out, and the checks every boundary makes on them.
 
-use numpy::{AllowTypeChange, PyArray1, PyArrayLike1};
+use std::marker::PhantomData;
+
+use numpy::{PyArray1, PyReadonlyArray1};
+use pyo3::exceptions::PyTypeError;
 use pyo3::prelude::*;
 
 use crate::errors::invalid;
 
-/// Any one-dimensional array-like of numbers (a numpy array of any real dtype, a list, a
-/// tuple), converted to `float64` by numpy.
-pub type ArrayIn<'py> = PyArrayLike1<'py, f64, AllowTypeChange>;
+/// A one-dimensional array-like of real numbers (a numpy array of any real dtype, a list, a
+/// tuple), converted to `float64`. Anything else is refused with a `TypeError` that says what
+/// was expected and what was given: an array of another shape (not flattened), complex values
+/// (not silently truncated to their real part), strings.
+pub struct ArrayIn<'py> {
+    values: Vec<f64>,
+    _py: PhantomData<&'py ()>,
+}
 
-/// The values of `array` (any layout, including strided views).
+/// `(3, 4)` as Python prints a shape.
+fn shape_text(shape: &[usize]) -> String {
+    match shape {
+        [n] => format!("({n},)"),
+        _ => format!(
+            "({})",
+            shape
+                .iter()
+                .map(|n| n.to_string())
+                .collect::<Vec<_>>()
+                .join(", ")
+        ),
+    }
+}
+
+impl<'a, 'py> FromPyObject<'a, 'py> for ArrayIn<'py> {
+    type Error = PyErr;
+
+    fn extract(obj: Borrowed<'a, 'py, PyAny>) -> PyResult<Self> {
+        let py = obj.py();
+        let numpy = py.import("numpy")?;
+        let array = numpy
+            .call_method1("asarray", (obj.to_owned(),))
+            .map_err(|e| {
+                PyTypeError::new_err(format!(
+                    "expected a 1-D array of floats (a numpy array, list or tuple of numbers), \
+                     but numpy cannot make an array of it: {e}"
+                ))
+            })?;
+        let shape: Vec<usize> = array.getattr("shape")?.extract()?;
+        let dtype = array.getattr("dtype")?;
+        let kind: String = dtype.getattr("kind")?.extract()?;
+        let dtype_name: String = dtype.getattr("name")?.extract()?;
+        if shape.len() != 1 {
+            let hint = match shape.len() {
+                0 => "; wrap a single number in a list, [x]".to_string(),
+                _ if shape.iter().filter(|n| **n != 1).count() <= 1 => {
+                    "; flatten it first (a.ravel()) if it holds one signal".to_string()
+                }
+                _ => "; pass one signal (one row or column) at a time".to_string(),
+            };
+            return Err(PyTypeError::new_err(format!(
+                "expected a 1-D array of floats, but got a {}-D array of shape {} ({dtype_name}){hint}",
+                shape.len(),
+                shape_text(&shape)
+            )));
+        }
+        match kind.as_str() {
+            "f" | "i" | "u" | "b" | "O" => {}
+            "c" => {
+                return Err(PyTypeError::new_err(format!(
+                    "expected a 1-D array of real floats, but got complex values ({dtype_name}, \
+                     shape {}); pass the real part (a.real) or the magnitude (abs(a)) explicitly",
+                    shape_text(&shape)
+                )));
+            }
+            _ => {
+                return Err(PyTypeError::new_err(format!(
+                    "expected a 1-D array of floats, but got an array of {dtype_name} (shape {})",
+                    shape_text(&shape)
+                )));
+            }
+        }
+        let floats = array.call_method1("astype", ("float64",)).map_err(|e| {
+            PyTypeError::new_err(format!(
+                "expected a 1-D array of floats, but these values are not all numbers: {e}"
+            ))
+        })?;
+        let readonly: PyReadonlyArray1<'py, f64> = floats.extract().map_err(PyErr::from)?;
+        Ok(ArrayIn {
+            values: readonly.as_array().iter().copied().collect(),
+            _py: PhantomData,
+        })
+    }
+}
+
+/// The values of `array`.
 pub fn values(array: &ArrayIn<'_>) -> Vec<f64> {
-    array.as_array().iter().copied().collect()
+    array.values.clone()
 }
 
 /// The values of `array`, refused when one is NaN or infinite (naming the first).

@@ -176,15 +176,33 @@ impl Compensator {
         self.lock().control_unit().to_string()
     }
 
-    /// Counters since the last reset: ``{"saturated": ..., "non_finite": ...}``; saturated
-    /// samples could not be reached within the limits (the output was clamped).
+    /// Counters since the last reset:
+    /// ``{"saturated": ..., "loop_saturated": ..., "non_finite": ...}``. ``saturated``: desired
+    /// positions out of reach within the limits (DIHC: outside the inverse model's range), the
+    /// drive was clamped; ``loop_saturated``: a delayed loop (``ihc-delayed``, ``wihc-delayed``)
+    /// drove the output to a limit although the position was reachable (it lagged or rang);
+    /// ``non_finite``: NaN or infinite desired positions (``step`` and ``process`` refuse them,
+    /// so this stays 0 here).
     #[getter]
     fn diagnostics<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
         let d = self.lock().diagnostics();
         dict(
             py,
-            [("saturated", d.saturated), ("non_finite", d.non_finite)],
+            [
+                ("saturated", d.saturated),
+                ("loop_saturated", d.loop_saturated),
+                ("non_finite", d.non_finite),
+            ],
         )
+    }
+
+    /// For ``"wihc"`` and ``"wihc-delayed"``: the worst-case loop gain of the delayed WIHC over
+    /// the limits, ``max |3 a1 x^2 + b_1 + ... + b_k| / a2`` (eq. (9) with ``H[v](t - Ts)``). At
+    /// or above 1 the delayed loop can ring between the limits after a jump in the desired
+    /// position; prefer ``"wihc"`` then. ``None`` for the other methods. Table 1: 1.66.
+    #[getter]
+    fn delayed_loop_gain(&self) -> Option<f64> {
+        self.lock().delayed_loop_gain()
     }
 
     fn __repr__(slf: &Bound<'_, Self>) -> PyResult<String> {

@@ -84,13 +84,15 @@ impl Identification {
 /// - ``holdout``: the fraction of samples at the end held out of the fit and reported;
 /// - ``offset``: ``"fit"`` (a constant fitted for the sensor's arbitrary zero), ``"none"`` or a
 ///   physical output offset;
-/// - ``margin``: the smallest branch slope the model must keep (normalised).
+/// - ``margin``: the smallest branch slope the model must keep (normalised);
+/// - ``accept_poor_fit``: return the model even when its RMS fit error exceeds the 10 % of the
+///   output range a usable hysteresis model stays under (by default ``IdentificationError``).
 ///
 /// Releases the GIL while it runs. Raises ``InvalidValueError`` for unusable samples or
 /// options and ``IdentificationError`` when no model can be identified (the message says what
 /// to change).
 #[pyfunction]
-#[pyo3(signature = (voltage, displacement, n = 10, method = "ls", direction = "plant", *, seed = 0, thresholds = None, warmup = WarmupArg::Name("auto".into()), holdout = 0.0, offset = OffsetArg::Name("fit".into()), margin = hystcomp_identify::DEFAULT_MARGIN, particles = 40, iterations = 200, polish = false, voltage_unit = "V", displacement_unit = "um"))]
+#[pyo3(signature = (voltage, displacement, n = 10, method = "ls", direction = "plant", *, seed = 0, thresholds = None, warmup = WarmupArg::Name("auto".into()), holdout = 0.0, offset = OffsetArg::Name("fit".into()), margin = hystcomp_identify::DEFAULT_MARGIN, particles = 40, iterations = 200, polish = false, accept_poor_fit = false, voltage_unit = "V", displacement_unit = "um"))]
 #[allow(clippy::too_many_arguments)]
 pub fn identify(
     py: Python<'_>,
@@ -108,6 +110,7 @@ pub fn identify(
     particles: usize,
     iterations: usize,
     polish: bool,
+    accept_poor_fit: bool,
     voltage_unit: &str,
     displacement_unit: &str,
 ) -> PyResult<Identification> {
@@ -159,6 +162,11 @@ pub fn identify(
         holdout,
         offset,
         margin,
+        max_fit_rms_percent: if accept_poor_fit {
+            None
+        } else {
+            IdentifyOptions::default().max_fit_rms_percent
+        },
         voltage_unit: voltage_unit.to_string(),
         displacement_unit: displacement_unit.to_string(),
         ..IdentifyOptions::default()

@@ -162,6 +162,8 @@ impl Mpim {
         self.clone()
     }
 
+    /// ``copy.copy(model)``: an independent copy, memory included (the same as ``copy()``;
+    /// the model holds no shared state, so it is also a deep copy).
     fn __copy__(&self) -> Mpim {
         self.clone()
     }

@@ -21,7 +21,7 @@ def test_exact_methods_invert_the_plant_model(table1, method):
     volts = c.process(DESIRED_UM)
     assert volts.shape == DESIRED_UM.shape and volts.dtype == np.float64
     np.testing.assert_allclose(table1.predict(volts), DESIRED_UM, rtol=0, atol=1e-9)
-    assert c.diagnostics == {"saturated": 0, "non_finite": 0}
+    assert c.diagnostics == {"saturated": 0, "loop_saturated": 0, "non_finite": 0}
 
 
 @pytest.mark.parametrize("method", ["ihc-delayed", "wihc-delayed"])
@@ -60,7 +60,7 @@ def test_outputs_never_leave_the_limits(model, method):
     assert volts.min() >= 1.0 and volts.max() <= 9.0
     assert c.diagnostics["saturated"] > 100
     c.reset()
-    assert c.diagnostics == {"saturated": 0, "non_finite": 0}
+    assert c.diagnostics == {"saturated": 0, "loop_saturated": 0, "non_finite": 0}
 
 
 def test_shorthand_classes_are_compensators(table1, table2):
@@ -150,4 +150,23 @@ def test_compensators_can_be_used_from_threads(table1):
         t.start()
     for t in threads:
         t.join()
-    assert shared.diagnostics == {"saturated": 0, "non_finite": 0}
+    assert shared.diagnostics == {"saturated": 0, "loop_saturated": 0, "non_finite": 0}
+
+
+def test_delayed_wihc_ringing_on_table1_is_a_loop_saturation(table1):
+    t = np.arange(0.0, 1.0, 1e-4)
+    desired = 35.0 + 20.0 * np.sin(2 * np.pi * t)  # reachable, from rest: a jump to 35 um
+    delayed = hystcomp.Compensator(table1, "wihc-delayed")
+    exact = hystcomp.Compensator(table1, "wihc")
+    gain = delayed.delayed_loop_gain
+    assert gain == exact.delayed_loop_gain
+    # (b_1 + ... + b_10) / a2 of Table 1: all ten operators moving near 0 V.
+    assert gain == pytest.approx(sum(table1.weights) / table1.a2, rel=1e-12)
+    assert gain > 1.0
+    assert hystcomp.Compensator(table1, "ihc").delayed_loop_gain is None
+    volts = delayed.process(desired)
+    assert volts.min() >= 0.0 and volts.max() <= 10.0
+    d = delayed.diagnostics
+    assert d["saturated"] == 0 and d["loop_saturated"] > 10, d
+    exact.process(desired)
+    assert exact.diagnostics == {"saturated": 0, "loop_saturated": 0, "non_finite": 0}

@@ -200,3 +200,51 @@ def test_missing_unreadable_and_invalid_files_raise_with_the_path(tmp_path):
         hystcomp.ModelFile.load(newer)
     with pytest.raises(OSError):
         hystcomp.ModelFile.load(TABLE1_FILE).save(tmp_path / "no" / "such" / "dir" / "m.json")
+
+
+def test_a_directory_as_model_file_is_refused_naming_it(tmp_path):
+    with pytest.raises(IsADirectoryError) as error:
+        hystcomp.ModelFile.load(tmp_path)
+    assert "is a directory" in str(error.value)
+    assert str(tmp_path) in str(error.value)
+    with pytest.raises(IsADirectoryError, match="is a directory"):
+        hystcomp.Compensator(tmp_path, "ihc")
+    # Saving into a missing folder names the target once and the folder that is missing.
+    target = tmp_path / "no" / "m.json"
+    with pytest.raises(FileNotFoundError) as missing:
+        hystcomp.ModelFile.load(TABLE1_FILE).save(target)
+    text = str(missing.value)
+    assert text.count(str(target)) == 1 and "does not exist" in text, text
+
+
+@pytest.mark.parametrize("shape", [(3, 4), (1, 5), (2, 1, 3)])
+def test_arrays_of_more_dimensions_are_refused_with_their_shape(shape):
+    m = hystcomp.Mpim.table1()
+    with pytest.raises(TypeError) as error:
+        m.process(np.zeros(shape))
+    text = str(error.value)
+    assert "expected a 1-D array of floats" in text, text
+    assert str(shape) in text, text
+    assert "dimensionality mismatch" not in text
+    # Nested lists too, and through a compensator.
+    with pytest.raises(TypeError, match=r"1-D array of floats.*\(2, 2\)"):
+        hystcomp.Compensator(TABLE1_FILE, "ihc").process([[1.0, 2.0], [3.0, 4.0]])
+    with pytest.raises(TypeError, match=r"0-D array.*wrap a single number in a list"):
+        m.process(3.0)
+    # Memory untouched by the refusals.
+    np.testing.assert_array_equal(m.memory, np.zeros(10))
+
+
+def test_complex_values_are_refused_not_truncated():
+    m = hystcomp.Mpim.table1()
+    for z in (np.array([0.1 + 0.2j, 0.3]), [0.5j, 0.1], np.array([0.1, 0.2], dtype=np.complex64)):
+        with pytest.raises(TypeError, match="complex values"):
+            m.process(z)
+    with pytest.raises(TypeError, match=r"complex values.*a\.real"):
+        hystcomp.Compensator(TABLE1_FILE, "ihc").process(np.array([30.0 + 0j]))
+    with pytest.raises(TypeError, match="expected a 1-D array of floats, but got an array of"):
+        m.process(np.array(["0.1", "0.2"]))
+    # Complex-typed zeros are still complex: the dtype decides, not the values.
+    with pytest.raises(TypeError, match="complex"):
+        m.process(np.zeros(3, dtype=complex))
+    np.testing.assert_array_equal(m.memory, np.zeros(10))

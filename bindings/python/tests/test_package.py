@@ -52,3 +52,17 @@ def test_exception_hierarchy():
         assert cls.__module__ == "hystcomp"
     assert issubclass(hystcomp.NotInvertibleError, hystcomp.InvalidValueError)
     assert hystcomp.__version__.count(".") == 2
+
+
+def test_every_public_member_of_the_extension_has_a_docstring():
+    missing = []
+    for name in dir(_hystcomp):
+        cls = getattr(_hystcomp, name)
+        if name.startswith("_") or not inspect.isclass(cls) or issubclass(cls, BaseException):
+            continue
+        for member, value in vars(cls).items():
+            if member.startswith("_") and member not in ("__len__", "__copy__"):
+                continue
+            if not (getattr(value, "__doc__", None) or "").strip():
+                missing.append(f"{name}.{member}")
+    assert not missing, f"no docstring: {missing}"

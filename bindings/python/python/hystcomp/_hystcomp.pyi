@@ -1,7 +1,8 @@
 """Type stubs of the extension module ``hystcomp._hystcomp`` (re-exported by ``hystcomp``).
 
 Array arguments accept any one-dimensional array-like of real numbers (numpy arrays of any real
-dtype, lists, tuples); array results are new ``float64`` numpy arrays.
+dtype, lists, tuples); anything else (a 2-D array, complex values, strings) raises ``TypeError``
+saying what was given. Array results are new ``float64`` numpy arrays.
 """
 
 import os
@@ -21,7 +22,10 @@ DEFAULT_MHE_BINS: int
 class Mpim:
     """The modified Prandtl-Ishlinskii model of eq. (4), normalised units, with memory."""
 
-    def __init__(self, thresholds: ArrayLike, weights: ArrayLike, a1: float, a2: float) -> None: ...
+    def __init__(self, thresholds: ArrayLike, weights: ArrayLike, a1: float, a2: float) -> None:
+        """``y = a1 x^3 + a2 x + sum b_i F_{r_i}[x]``: thresholds ``r_i`` (non-negative,
+        increasing) and weights ``b_i``, one per play operator; memory starts at zero (eq. (1)).
+        Raises InvalidValueError for NaN, unsorted or negative thresholds, or unequal lengths."""
     @staticmethod
     def table1() -> Mpim:
         """Table 1 of the paper: the plant model for IHC and WIHC."""
@@ -37,20 +41,26 @@ class Mpim:
     @property
     def a2(self) -> float: ...
     @property
-    def memory(self) -> FloatArray: ...
-    def set_memory(self, memory: ArrayLike) -> None: ...
-    def __len__(self) -> int: ...
+    def memory(self) -> FloatArray:
+        """The operators' memory ``F_{r_i}[x](t_i)``, one per operator (a copy)."""
+    def set_memory(self, memory: ArrayLike) -> None:
+        """Sets the memory explicitly (one finite value per operator)."""
+    def __len__(self) -> int:
+        """The number of play operators ``n``."""
     def step(self, x: float) -> float:
         """One sample; raises InvalidValueError for NaN or infinite ``x``."""
     def process(self, x: ArrayLike) -> FloatArray:
         """A whole signal from the current memory."""
-    def reset(self) -> None: ...
+    def reset(self) -> None:
+        """Back to zero memory (eq. (1))."""
     def check_invertible(self, lo: float = 0.0, hi: float = 1.0) -> float:
         """The smallest branch slope over ``[lo, hi]``; raises NotInvertibleError."""
     def pi_part_inverse(self) -> Mpim:
         """The eq. (7) inverse of the PI part (``a1 = 0``)."""
-    def copy(self) -> Mpim: ...
-    def __copy__(self) -> Mpim: ...
+    def copy(self) -> Mpim:
+        """An independent copy, memory included."""
+    def __copy__(self) -> Mpim:
+        """``copy.copy(model)``: an independent copy, memory included (also a deep copy)."""
 
 class Scale:
     """``physical = offset + scale * normalised``."""
@@ -64,8 +74,10 @@ class Scale:
     def offset(self) -> float: ...
     @property
     def scale(self) -> float: ...
-    def normalise(self, physical: float) -> float: ...
-    def to_physical(self, normalised: float) -> float: ...
+    def normalise(self, physical: float) -> float:
+        """``(physical - offset) / scale``."""
+    def to_physical(self, normalised: float) -> float:
+        """``offset + scale * normalised``."""
 
 class ModelFile:
     """An identified model with its physical scales and direction (JSON, format version 1)."""
@@ -82,15 +94,23 @@ class ModelFile:
         output: Optional[Scale] = None,
         input_range: Sequence[float] = (0.0, 1.0),
         description: Optional[str] = None,
-    ) -> None: ...
+    ) -> None:
+        """A validated model file: ``direction`` is ``"plant"`` (voltage -> displacement, for
+        IHC and WIHC) or ``"inverse"`` (displacement -> voltage, for DIHC); normalised
+        parameters of eq. (4) and the physical scales of input and output."""
     @staticmethod
     def load(path: PathLike) -> ModelFile:
-        """Raises FileNotFoundError/OSError or ModelFileError."""
+        """Reads and validates a model file. Raises FileNotFoundError, IsADirectoryError or
+        OSError (naming the path), or ModelFileError for bad contents."""
     @staticmethod
-    def from_json(text: str) -> ModelFile: ...
-    def to_json(self) -> str: ...
-    def save(self, path: PathLike) -> None: ...
-    def model(self) -> Mpim: ...
+    def from_json(text: str) -> ModelFile:
+        """Parses and validates a model file's JSON text."""
+    def to_json(self) -> str:
+        """The JSON text of the file (format version 1)."""
+    def save(self, path: PathLike) -> None:
+        """Writes the file atomically (a reader sees the old file or the new one)."""
+    def model(self) -> Mpim:
+        """The normalised MPIM, from zero memory."""
     def predict(self, inputs: ArrayLike) -> FloatArray:
         """Model outputs (physical units) for physical inputs, from zero memory."""
     @property
@@ -126,24 +146,44 @@ class Compensator:
         model: Union[ModelFile, PathLike],
         method: str = "ihc",
         limits: Optional[Sequence[float]] = None,
-    ) -> None: ...
+    ) -> None:
+        """``method``: ``"ihc"``, ``"ihc-delayed"``, ``"wihc"``, ``"wihc-delayed"`` (plant
+        models) or ``"dihc"`` (inverse models); ``limits``: ``(min, max)`` drive limits, by
+        default the range the model was identified on. Every output stays within them, never
+        NaN. Raises WrongDirectionError, NotInvertibleError, InvalidValueError, ModelFileError
+        or an OSError for the file."""
     @staticmethod
     def from_mpim(model: Mpim, method: str = "ihc", limits: Sequence[float] = (0.0, 1.0)) -> Compensator:
         """A compensator in normalised units."""
-    def step(self, y_d: float) -> float: ...
-    def process(self, y_d: ArrayLike) -> FloatArray: ...
-    def reset(self) -> None: ...
+    def step(self, y_d: float) -> float:
+        """One sample: the drive for the desired position ``y_d``; InvalidValueError for NaN
+        or infinite ``y_d`` (state unchanged)."""
+    def process(self, y_d: ArrayLike) -> FloatArray:
+        """A whole desired trajectory from the current state: the drive signal."""
+    def reset(self) -> None:
+        """Back to the initial state (memory zero, eq. (1)); diagnostics cleared."""
     @property
-    def limits(self) -> Tuple[float, float]: ...
+    def limits(self) -> Tuple[float, float]:
+        """``(min, max)`` drive limits, in ``control_unit``."""
     @property
-    def method(self) -> str: ...
+    def method(self) -> str:
+        """``"ihc"``, ``"ihc-delayed"``, ``"wihc"``, ``"wihc-delayed"`` or ``"dihc"``."""
     @property
-    def desired_unit(self) -> str: ...
+    def desired_unit(self) -> str:
+        """Unit of the desired position (the input), e.g. ``"um"``."""
     @property
-    def control_unit(self) -> str: ...
+    def control_unit(self) -> str:
+        """Unit of the drive (the output), e.g. ``"V"``."""
     @property
     def diagnostics(self) -> Dict[str, int]:
-        """``{"saturated": ..., "non_finite": ...}`` since the last reset."""
+        """``{"saturated": ..., "loop_saturated": ..., "non_finite": ...}`` since the last
+        reset: desired positions out of reach (the drive was clamped), samples a delayed loop
+        drove to a limit although the position was reachable, and non-finite inputs."""
+    @property
+    def delayed_loop_gain(self) -> Optional[float]:
+        """``wihc``/``wihc-delayed``: the delayed WIHC's worst-case loop gain over the limits,
+        ``max |3 a1 x^2 + b_1 + ... + b_k| / a2``; at or above 1 the delayed loop can ring after a
+        jump (prefer ``"wihc"``). ``None`` for the other methods. Table 1: 1.66."""
 
 class Identification:
     """An identified model and its fit report."""
@@ -171,6 +211,7 @@ def identify(
     particles: int = 40,
     iterations: int = 200,
     polish: bool = False,
+    accept_poor_fit: bool = False,
     voltage_unit: str = "V",
     displacement_unit: str = "um",
 ) -> Identification:
@@ -179,12 +220,17 @@ def identify(
 class Stage:
     """A simulated piezo nanopositioning stage."""
 
-    def __init__(self, config_toml: Optional[str] = None, seed: int = 0) -> None: ...
+    def __init__(self, config_toml: Optional[str] = None, seed: int = 0) -> None:
+        """The built-in stage, or one described by a TOML text; ``seed`` fixes its noise."""
     @staticmethod
-    def from_file(path: PathLike, seed: int = 0) -> Stage: ...
-    def step(self, command_v: float) -> float: ...
-    def run(self, command_v: ArrayLike) -> StageResponse: ...
-    def reset(self) -> None: ...
+    def from_file(path: PathLike, seed: int = 0) -> Stage:
+        """A stage from a TOML file."""
+    def step(self, command_v: float) -> float:
+        """One sample: the measured position (um) for a DAC command (V)."""
+    def run(self, command_v: ArrayLike) -> StageResponse:
+        """A whole command signal from the current state."""
+    def reset(self) -> None:
+        """Back to rest, time zero, the same noise sequence."""
     @property
     def sample_rate_hz(self) -> float: ...
     @property
@@ -237,10 +283,14 @@ class TrackingIndices:
     def mhe_bins(self) -> int: ...
     def as_dict(self) -> Dict[str, float]: ...
 
-def e_m(desired: ArrayLike, measured: ArrayLike) -> float: ...
-def e_rms(desired: ArrayLike, measured: ArrayLike) -> float: ...
-def e_mhe(desired: ArrayLike, measured: ArrayLike, bins: int = 100) -> float: ...
-def tracking_indices(desired: ArrayLike, measured: ArrayLike, bins: int = 100) -> TrackingIndices: ...
+def e_m(desired: ArrayLike, measured: ArrayLike) -> float:
+    """Maximum tracking error (D1), percent of the desired range."""
+def e_rms(desired: ArrayLike, measured: ArrayLike) -> float:
+    """Root-mean-square tracking error (D2), percent of the desired range."""
+def e_mhe(desired: ArrayLike, measured: ArrayLike, bins: int = 100) -> float:
+    """Maximum hysteresis error, eq. (12), over ``bins`` bins, percent of the desired range."""
+def tracking_indices(desired: ArrayLike, measured: ArrayLike, bins: int = 100) -> TrackingIndices:
+    """e_mhe, e_m and e_rms together."""
 
 class StudyResult:
     """The paper's Table 3 measured on the simulated stage."""
