@@ -85,7 +85,7 @@ impl<'a, 'py> FromPyObject<'a, 'py> for ArrayIn<'py> {
                 "expected a 1-D array of floats, but these values are not all numbers: {e}"
             ))
         })?;
-        let readonly: PyReadonlyArray1<'py, f64> = floats.extract().map_err(PyErr::from)?;
+        let readonly: PyReadonlyArray1<'py, f64> = floats.extract()?;
         Ok(ArrayIn {
             values: readonly.as_array().iter().copied().collect(),
             _py: PhantomData,
