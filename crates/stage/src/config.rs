@@ -213,7 +213,8 @@ impl Default for PreisachConfig {
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct BoucWenConfig {
-    /// `A`, dimensionless. Default 0.40648 (literature set for a piezo actuator).
+    /// `A`, dimensionless. Default 0.40648 (the set issue 4 gives as a literature set for a
+    /// piezo; its primary source could not be traced, see STAGE.md).
     pub a: f64,
     /// `B`, 1/V. Default 0.00833 (same set).
     pub b: f64,

@@ -7,7 +7,8 @@
 //! - the amplifier: gain, rails, first-order small-signal bandwidth and a slew-rate limit
 //!   `I_max / C` into the stack's capacitance, integrated exactly over each sample;
 //! - rate-independent hysteresis ([`Hysteresis`]): a Preisach model with a smooth asymmetric
-//!   density (default) or an asymmetric Bouc-Wen model;
+//!   density (default), an asymmetric Bouc-Wen model, or (for tests only) an MPIM read from a
+//!   model file;
 //! - creep: a bank of Kelvin-Voigt elements giving a logarithmic-type drift (about 1.5 % of
 //!   the step per decade of time);
 //! - mechanics: a second-order resonance (800 Hz, damping ratio 0.05) discretised exactly;
@@ -26,6 +27,8 @@
 //! let gain = config.full_scale_command_v() / quasi_static_stroke_um(&config).unwrap();
 //! assert!(gain > 0.1 && gain < 0.2); // V per um
 //! ```
+
+#![warn(missing_docs)]
 
 mod amplifier;
 mod config;

@@ -287,7 +287,8 @@ fn interpolate(branch: &[f64], v: f64) -> f64 {
 }
 
 #[test]
-fn both_models_give_closed_major_loops_with_minor_loops_inside() {
+fn closed_major_loops_preisach_minor_loops_inside_bouc_wen_minor_loops_stray_a_bounded_10_percent()
+{
     let mut rng = ChaCha8Rng::seed_from_u64(12);
     for model in [HysteresisModel::Preisach, HysteresisModel::BoucWen] {
         let mut config = StageConfig::default();
@@ -317,8 +318,12 @@ fn both_models_give_closed_major_loops_with_minor_loops_inside() {
         // a curve rising from the descending branch where h > 0 rises with a slope larger by
         // 2 B h than the branch it left (B = Gamma), so it crosses the major loop, and likewise
         // for a curve falling from the ascending branch where h < 0; repeated minor loops drift
-        // towards h = 0. This known artefact of the model is documented in STAGE.md; its size
-        // is bounded here (15 % of the stroke; about 7 um, 10 %, is reached) and printed.
+        // towards h = 0. This known artefact of the model is documented in STAGE.md. The issue
+        // asks for minor loops inside the major loop: Bouc-Wen does not give that, and this test
+        // says so instead of hiding it under a loose bound. It pins the size of the artefact for
+        // the default set and these 30 seeded loops: 7.11 um (9.9 % of the stroke) is reached;
+        // the bound is 11 % of the stroke, and a stray of at least 5 % must be seen (so that a
+        // change of the model that removes or enlarges the artefact is noticed).
         let fresh = h.clone();
         let mut stray: f64 = 0.0;
         for _ in 0..30 {
@@ -344,7 +349,7 @@ fn both_models_give_closed_major_loops_with_minor_loops_inside() {
                     HysteresisModel::Preisach | HysteresisModel::Mpim => {
                         inside(x, v, 1e-4);
                     }
-                    HysteresisModel::BoucWen => stray = stray.max(inside(x, v, 0.15 * up[top])),
+                    HysteresisModel::BoucWen => stray = stray.max(inside(x, v, 0.11 * up[top])),
                 }
             }
             let mut g = fresh.clone();
@@ -357,7 +362,7 @@ fn both_models_give_closed_major_loops_with_minor_loops_inside() {
                     HysteresisModel::Preisach | HysteresisModel::Mpim => {
                         inside(x, v, 1e-4);
                     }
-                    HysteresisModel::BoucWen => stray = stray.max(inside(x, v, 0.15 * up[top])),
+                    HysteresisModel::BoucWen => stray = stray.max(inside(x, v, 0.11 * up[top])),
                 }
             }
             // Cycled minor loops.
@@ -371,7 +376,7 @@ fn both_models_give_closed_major_loops_with_minor_loops_inside() {
                         HysteresisModel::Preisach | HysteresisModel::Mpim => {
                             inside(x, v, 1e-4);
                         }
-                        HysteresisModel::BoucWen => stray = stray.max(inside(x, v, 0.15 * up[top])),
+                        HysteresisModel::BoucWen => stray = stray.max(inside(x, v, 0.11 * up[top])),
                     }
                 }
                 if model == HysteresisModel::Preisach {
@@ -382,6 +387,10 @@ fn both_models_give_closed_major_loops_with_minor_loops_inside() {
         }
         if model == HysteresisModel::BoucWen {
             eprintln!("Bouc-Wen: cycled minor loops stray up to {stray} um outside the major loop");
+            assert!(
+                stray > 0.05 * up[top],
+                "Bouc-Wen minor loops stray only {stray} um: update STAGE.md and this test"
+            );
         }
     }
 }
