@@ -7,6 +7,8 @@
 //! compensators come from `hystcomp-core`, identification from `hystcomp-identify` and the stage
 //! from `hystcomp-stage`.
 
+#![warn(missing_docs)]
+
 pub mod excitation;
 pub mod figures;
 pub mod indices;

@@ -26,25 +26,36 @@ pub struct Reference {
 /// Section 4.1 of the paper.
 #[derive(Debug, Clone, Deserialize)]
 pub struct ReferenceStage {
+    /// The piezo actuator, e.g. a Piezomechanik PSt 150/7/100 preloaded stack.
     pub actuator: String,
+    /// The positioning stage it drives (75 um nominal stroke).
     pub stage: String,
     /// Amplifier gain, V/V.
     pub amplifier_gain: f64,
     /// Amplifier output range, V.
     pub amplifier_range_v: [f64; 2],
+    /// Resolution of the controller's DAC, bits.
     pub dac_bits: u32,
+    /// Resolution of the controller's ADC, bits.
     pub adc_bits: u32,
+    /// The position sensor, in words.
     pub sensor: String,
+    /// The real-time controller board.
     pub controller: String,
 }
 
 /// `y_d(t) = offset + sum amp_k sin(2 pi f_k t + phase_k)`, micrometres.
 #[derive(Debug, Clone, Deserialize)]
 pub struct ReferenceTrajectory {
+    /// Unit of `offset`, `amplitudes` and `range_um` (`"um"`).
     pub unit: String,
+    /// Constant offset, um.
     pub offset: f64,
+    /// Amplitude of each tone, um.
     pub amplitudes: Vec<f64>,
+    /// Frequency of each tone, Hz.
     pub frequencies_hz: Vec<f64>,
+    /// Phase of each tone, rad.
     pub phases_rad: Vec<f64>,
     /// Common period of the tones, s.
     pub period_s: f64,
@@ -55,9 +66,13 @@ pub struct ReferenceTrajectory {
 /// An MPIM in the paper's normalised units (eq. (4)).
 #[derive(Debug, Clone, Deserialize)]
 pub struct ReferenceMpim {
+    /// Thresholds `r_i` of the play operators, normalised input units (eq. (11)).
     pub thresholds: Vec<f64>,
+    /// Weights `p_i` of the play operators, normalised output per normalised input.
     pub weights: Vec<f64>,
+    /// Cubic coefficient `a1` of the input function `g(x) = a1 x^3 + a2 x`, normalised units.
     pub a1: f64,
+    /// Linear coefficient `a2` of `g(x)`, normalised units.
     pub a2: f64,
 }
 
@@ -80,9 +95,13 @@ pub struct ReferenceIndices {
 /// Table 3 of the paper, percent of the `y_d` range.
 #[derive(Debug, Clone, Deserialize)]
 pub struct ReferenceTable3 {
+    /// e_mhe of the uncompensated stage, % of the `y_d` range.
     pub uncompensated_e_mhe: f64,
+    /// IHC, %.
     pub ihc: ReferenceIndices,
+    /// WIHC, %.
     pub wihc: ReferenceIndices,
+    /// DIHC, %.
     pub dihc: ReferenceIndices,
 }
 
