@@ -242,7 +242,9 @@ int hystcomp_compensator_limits(const struct HystcompCompensator *h, double *v_m
 
 /**
  * Writes the counters since the last reset: samples whose desired position could not be
- * reached within the limits (`*saturated`) and NaN or infinite samples (`*non_finite`).
+ * reached within the limits (`*saturated`; a delayed loop's clamp of a reachable position is
+ * counted by `hystcomp_compensator_loop_saturated` instead) and NaN or infinite samples
+ * (`*non_finite`).
  * Either pointer may be NULL when that counter is not wanted.
  *
  * # Safety
@@ -251,6 +253,30 @@ int hystcomp_compensator_limits(const struct HystcompCompensator *h, double *v_m
 int hystcomp_compensator_diagnostics(const struct HystcompCompensator *h,
                                      uint64_t *saturated,
                                      uint64_t *non_finite);
+
+/**
+ * Writes the number of samples, since the last reset, that a delayed loop (`ihc-delayed`,
+ * `wihc-delayed`) drove to a drive limit although the desired position was reachable within
+ * the limits: the loop lagged or rang after a jump (always 0 for the exact methods and DIHC).
+ * Those samples are not counted in `hystcomp_compensator_diagnostics`'s `*saturated`.
+ *
+ * # Safety
+ * `h` must be a live handle or NULL; `loop_saturated` valid for one write (NULL is refused).
+ */
+int hystcomp_compensator_loop_saturated(const struct HystcompCompensator *h,
+                                        uint64_t *loop_saturated);
+
+/**
+ * Writes the worst-case loop gain of the delayed WIHC over the drive limits,
+ * `max |3 a1 x^2 + b_1 + ... + b_k| / a2` (eq. (9) with `H[v](t - Ts)`), for a compensator of
+ * method `wihc` or `wihc-delayed`. At or above 1 the delayed loop can ring between the limits
+ * after a jump in the desired position; prefer `wihc` then (Table 1 of the paper: 1.66).
+ * Other methods: `HYSTCOMP_STATUS_INVALID_ARGUMENT`.
+ *
+ * # Safety
+ * `h` must be a live handle or NULL; `gain` valid for one write (NULL is refused).
+ */
+int hystcomp_compensator_delayed_loop_gain(const struct HystcompCompensator *h, double *gain);
 
 /**
  * Releases a compensator. NULL is accepted (and ignored); a handle must not be used after,

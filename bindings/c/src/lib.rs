@@ -701,7 +701,9 @@ pub unsafe extern "C" fn hystcomp_compensator_limits(
 }
 
 /// Writes the counters since the last reset: samples whose desired position could not be
-/// reached within the limits (`*saturated`) and NaN or infinite samples (`*non_finite`).
+/// reached within the limits (`*saturated`; a delayed loop's clamp of a reachable position is
+/// counted by `hystcomp_compensator_loop_saturated` instead) and NaN or infinite samples
+/// (`*non_finite`).
 /// Either pointer may be NULL when that counter is not wanted.
 ///
 /// # Safety
@@ -725,6 +727,57 @@ pub unsafe extern "C" fn hystcomp_compensator_diagnostics(
             unsafe { non_finite.write(d.non_finite) };
         }
         Ok(())
+    })
+}
+
+/// Writes the number of samples, since the last reset, that a delayed loop (`ihc-delayed`,
+/// `wihc-delayed`) drove to a drive limit although the desired position was reachable within
+/// the limits: the loop lagged or rang after a jump (always 0 for the exact methods and DIHC).
+/// Those samples are not counted in `hystcomp_compensator_diagnostics`'s `*saturated`.
+///
+/// # Safety
+/// `h` must be a live handle or NULL; `loop_saturated` valid for one write (NULL is refused).
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn hystcomp_compensator_loop_saturated(
+    h: *const HystcompCompensator,
+    loop_saturated: *mut u64,
+) -> c_int {
+    boundary(|| {
+        // SAFETY: a live handle or NULL (the caller's contract); only read.
+        let c = unsafe { h.as_ref() }.ok_or_else(|| Failure::null("compensator handle"))?;
+        let count = c.inner.diagnostics().loop_saturated;
+        // SAFETY: non-NULL checked by write_out, valid for a write (the caller's contract).
+        unsafe { write_out(loop_saturated, count, "loop_saturated") }
+    })
+}
+
+/// Writes the worst-case loop gain of the delayed WIHC over the drive limits,
+/// `max |3 a1 x^2 + b_1 + ... + b_k| / a2` (eq. (9) with `H[v](t - Ts)`), for a compensator of
+/// method `wihc` or `wihc-delayed`. At or above 1 the delayed loop can ring between the limits
+/// after a jump in the desired position; prefer `wihc` then (Table 1 of the paper: 1.66).
+/// Other methods: `HYSTCOMP_STATUS_INVALID_ARGUMENT`.
+///
+/// # Safety
+/// `h` must be a live handle or NULL; `gain` valid for one write (NULL is refused).
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn hystcomp_compensator_delayed_loop_gain(
+    h: *const HystcompCompensator,
+    gain: *mut f64,
+) -> c_int {
+    boundary(|| {
+        // SAFETY: a live handle or NULL (the caller's contract); only read.
+        let c = unsafe { h.as_ref() }.ok_or_else(|| Failure::null("compensator handle"))?;
+        let value = c.inner.delayed_loop_gain().ok_or_else(|| {
+            Failure::new(
+                HystcompStatus::InvalidArgument,
+                format!(
+                    "{} has no delayed WIHC loop; the loop gain exists for wihc and wihc-delayed",
+                    c.inner.method()
+                ),
+            )
+        })?;
+        // SAFETY: non-NULL checked by write_out, valid for a write (the caller's contract).
+        unsafe { write_out(gain, value, "gain") }
     })
 }
 

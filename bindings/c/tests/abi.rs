@@ -776,3 +776,80 @@ fn the_last_error_is_per_thread() {
         "another thread's failure does not touch this one's"
     );
 }
+
+#[test]
+fn delayed_wihc_reports_its_loop_gain_and_counts_its_ringing_apart() {
+    let path = model_path("table1-plant.json");
+    let delayed = from_file(&path, "wihc-delayed", None).unwrap();
+    let exact = from_file(&path, "wihc", None).unwrap();
+    let ihc = from_file(&path, "ihc", None).unwrap();
+    // (b_1 + ... + b_10) / a2 of Table 1: all ten operators moving near 0 V.
+    let expected = TABLE1.weights.iter().sum::<f64>() / TABLE1.a2;
+    for h in [delayed, exact] {
+        let mut gain = f64::NAN;
+        // SAFETY: a live handle and a valid out-pointer.
+        assert_eq!(
+            unsafe { hystcomp_compensator_delayed_loop_gain(h, &mut gain) },
+            OK
+        );
+        assert!((gain - expected).abs() < 1e-12 && gain > 1.0, "{gain}");
+    }
+    let mut gain = 0.0;
+    // SAFETY: a live handle and a valid out-pointer.
+    assert_eq!(
+        unsafe { hystcomp_compensator_delayed_loop_gain(ihc, &mut gain) },
+        INVALID_ARGUMENT
+    );
+    assert!(
+        last_error().contains("ihc has no delayed WIHC loop"),
+        "{}",
+        last_error()
+    );
+    // 35 + 20 sin(2 pi t) um from rest at 10 kHz: reachable, but the delayed loop rings.
+    for k in 0..10_000 {
+        let y_d = 35.0 + 20.0 * (2.0 * std::f64::consts::PI * k as f64 * 1e-4).sin();
+        for h in [delayed, exact] {
+            let (status, v) = step(h, y_d);
+            assert_eq!(status, OK);
+            assert!((0.0..=10.0).contains(&v));
+        }
+    }
+    let counts = |h| {
+        let (mut saturated, mut non_finite, mut looped) = (9, 9, 9);
+        // SAFETY: a live handle and valid out-pointers.
+        unsafe {
+            assert_eq!(
+                hystcomp_compensator_diagnostics(h, &mut saturated, &mut non_finite),
+                OK
+            );
+            assert_eq!(hystcomp_compensator_loop_saturated(h, &mut looped), OK);
+        }
+        (saturated, looped, non_finite)
+    };
+    let (saturated, looped, non_finite) = counts(delayed);
+    assert_eq!((saturated, non_finite), (0, 0));
+    assert!(looped > 10, "{looped}");
+    assert_eq!(counts(exact), (0, 0, 0));
+    // NULL handle and NULL out-pointers are refused with the argument's name.
+    // SAFETY: NULL is accepted and refused.
+    unsafe {
+        assert_eq!(
+            hystcomp_compensator_loop_saturated(null(), &mut 0),
+            NULL_POINTER
+        );
+        assert_eq!(
+            hystcomp_compensator_loop_saturated(delayed, null_mut()),
+            NULL_POINTER
+        );
+        assert!(last_error().contains("loop_saturated is NULL"));
+        assert_eq!(
+            hystcomp_compensator_delayed_loop_gain(delayed, null_mut()),
+            NULL_POINTER
+        );
+        assert!(last_error().contains("gain is NULL"));
+    }
+    for h in [delayed, exact, ihc] {
+        // SAFETY: live handles, freed once.
+        unsafe { hystcomp_compensator_free(h) };
+    }
+}
