@@ -21,13 +21,17 @@ use crate::{
 ///     model whose gain there reaches 1 ([`CoreError::DelayedWihcUnstable`]).
 ///   - After a jump in `y_d` the loop swings over a wide range and more operators move. Its
 ///     worst case over the limits is [`Wihc::delayed_loop_gain`]. Below 1 the loop settles
-///     within a few tens of samples (the error shrinks at least by that factor each sample)
-///     and then follows the exact solution to within a fraction of a sample's step, a gap
-///     that shrinks with the sampling rate. At or above 1 (Table 1 of the paper: 1.66, all
-///     ten operators moving near `x = 0`) it can ring between the output limits until the
-///     motion reverses: from rest, `y_d = 35 + 20 sin(2 pi t)` um alternates 0 V / 10 V for
-///     about 50 samples. Those clamped samples count in [`Diagnostics::loop_saturated`], not
-///     in [`Diagnostics::saturated`]: the desired position was reachable.
+///     within a few tens of samples (the error shrinks at least by that factor each sample):
+///     the model's position then follows `y_d`, and once the trajectory has swept past the
+///     range of the settling its drive follows the exact WIHC's, both to within a gap that
+///     shrinks with the sampling rate. At or above 1 (Table 1 of the paper: 1.66, all
+///     ten operators moving near `x = 0`) it can ring between the output limits: from rest at
+///     10 kHz, `y_d = 35 + 20 sin(2 pi t)` um makes it alternate between 0 V and 10 V, 151 of
+///     the first 230 samples at a limit, before it settles; the operators' memory the ringing
+///     leaves then keeps its drive off the exact WIHC's (the model's position still follows
+///     `y_d`) until the trajectory sweeps past the ringing's range. The clamped samples count
+///     in [`Diagnostics::loop_saturated`], not in [`Diagnostics::saturated`]: the desired
+///     position was reachable.
 ///
 ///   On smooth trajectories sampled fast, started from a consistent state (the study:
 ///   10 kHz, 1 Hz, from rest at the trajectory's start) it stays within a fraction of a
