@@ -19,18 +19,21 @@ fn inverse<T: Real>(n: usize) -> Mpim<T, Vec<T>> {
     paper::TABLE2.spread(n).unwrap()
 }
 
-/// The paper's three-tone trajectory shape, normalised into the reachable range of the plant:
-/// a voltage multisine run through the plant, so every sample is reachable.
+/// A three-tone trajectory shape, normalised into the reachable range of the plant: a voltage
+/// multisine run through the plant, so every sample is reachable. It rises smoothly from rest
+/// over its first tenth, as a stage starts, so that no compensator starts with a jump (after
+/// which a delayed WIHC with a loop gain above 1, as Table 1's, rings for a while).
 fn desired<T: Real>(model: &Mpim<T, Vec<T>>) -> Vec<T> {
     let mut p = model.clone();
     (0..SAMPLES)
         .map(|k| {
             let t = k as f64 / SAMPLES as f64 * 10.0;
+            let rise = 0.5 - 0.5 * (std::f64::consts::PI * t.min(1.0)).cos();
             let v = 0.5
                 + 0.14 * (std::f64::consts::PI * t + 2.6).sin()
                 + 0.14 * (1.6 * std::f64::consts::PI * t + 3.0).sin()
                 + 0.2 * (2.0 * std::f64::consts::PI * t + 1.5).sin();
-            p.step(T::from_f64(v))
+            p.step(T::from_f64(rise * v))
         })
         .collect()
 }

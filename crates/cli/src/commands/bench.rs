@@ -70,16 +70,24 @@ fn time(samples: usize, repeats: usize, mut run: impl FnMut()) -> (f64, f64) {
 }
 
 /// One period of the paper's trajectory (section 4.3) mapped onto the normalised voltage range
-/// 0.1 .. 0.9, through `plant`: every desired sample is reachable.
+/// 0.1 .. 0.9, through `plant`: every desired sample is reachable. It rises smoothly from rest
+/// over its first tenth, as a stage starts, so that no compensator starts with a jump (after
+/// which a delayed WIHC with a loop gain above 1 rings for a while).
 fn trajectory<T: Real>(plant: &Mpim<T, Vec<T>>, samples: usize) -> (Vec<T>, Vec<T>) {
     let reference = Reference::paper();
     let [lo, hi] = reference.trajectory.range_um;
     let rate_hz = samples as f64 / reference.trajectory.period_s;
     let (_, positions) = reference.trajectory().sample(rate_hz, samples);
+    let rise_samples = (samples / 10).max(1) as f64;
     let mut p = plant.clone();
     let volts: Vec<T> = positions
         .iter()
-        .map(|y| T::from_f64(0.1 + 0.8 * (y - lo) / (hi - lo)))
+        .enumerate()
+        .map(|(k, y)| {
+            let rise =
+                0.5 - 0.5 * (std::f64::consts::PI * (k as f64 / rise_samples).min(1.0)).cos();
+            T::from_f64(rise * (0.1 + 0.8 * (y - lo) / (hi - lo)))
+        })
         .collect();
     let desired = volts.iter().map(|&v| p.step(v)).collect();
     (volts, desired)
