@@ -404,7 +404,7 @@ pub enum DataError {
     Write {
         /// The file.
         path: PathBuf,
-        /// What the operating system said.
+        /// What went wrong, naming the path ("could not write PATH: reason").
         source: io::Error,
     },
     /// The file holds no rows of data: it is empty, or has only blank lines, comments or a
@@ -618,9 +618,8 @@ impl fmt::Display for DataError {
                     _ => Ok(()),
                 }
             }
-            DataError::Write { path, source } => {
-                write!(f, "cannot write {}: {source}", path.display())
-            }
+            // The source already reads "could not write PATH: reason".
+            DataError::Write { source, .. } => write!(f, "{source}"),
             DataError::Empty { path } => write!(
                 f,
                 "{} holds no rows of data (it is empty, or has only blank lines, comments or a \
@@ -1685,9 +1684,10 @@ pub fn write_delimited(
         .delimiter(byte)
         .terminator(csv::Terminator::Any(b'\n'))
         .from_writer(Vec::new());
+    // The source names the path, as the errors of write_atomic do.
     let write_error = |error: csv::Error| DataError::Write {
         path: path.to_owned(),
-        source: io::Error::other(error.to_string()),
+        source: io::Error::other(format!("could not write {}: {error}", path.display())),
     };
     if !header.is_empty() {
         writer.write_record(header).map_err(write_error)?;
@@ -1704,10 +1704,9 @@ pub fn write_delimited(
         }
         writer.write_record(&fields).map_err(write_error)?;
     }
-    let contents = writer.into_inner().map_err(|error| DataError::Write {
-        path: path.to_owned(),
-        source: io::Error::other(error.to_string()),
-    })?;
+    let contents = writer
+        .into_inner()
+        .map_err(|error| write_error(error.into_error().into()))?;
     crate::atomic::write_atomic(path, &contents).map_err(|source| DataError::Write {
         path: path.to_owned(),
         source,

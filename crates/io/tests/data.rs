@@ -1710,3 +1710,15 @@ fn atomic_write_keeps_permissions_and_symbolic_links() {
     assert_eq!(fs::read(&path).expect("reading"), b"through the link");
     assert_eq!(entries(dir.path()), ["data.csv", "latest.csv"]);
 }
+
+#[test]
+fn a_failed_write_names_the_path_once_and_leaves_nothing() {
+    let d = dir();
+    let path = d.path().join("missing-folder").join("out.csv");
+    let error = write_csv(&path, &["a"], &[&[1.0, 2.0]]).unwrap_err();
+    let message = error.to_string();
+    let shown = path.display().to_string();
+    assert_eq!(message.matches(&shown).count(), 1, "{message}");
+    assert!(matches!(error, DataError::Write { .. }), "{error:?}");
+    assert!(entries(d.path()).is_empty(), "{:?}", entries(d.path()));
+}
