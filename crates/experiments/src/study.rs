@@ -375,6 +375,8 @@ pub fn run_study(
         thresholds: Thresholds::Uniform(options.operators),
         // The record starts at rest with the operators' memory at zero (eq. (1)).
         warmup: Warmup::Samples(0),
+        // The study measures what each solver reaches, a poor fit included (a swarm cut short).
+        max_fit_rms_percent: None,
         ..IdentifyOptions::default()
     };
     let mut pso = options.pso.clone();
