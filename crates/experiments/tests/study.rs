@@ -163,6 +163,11 @@ fn default_study_meets_the_acceptance_bounds_and_writes_a_report_chromium_shows(
         .find(|c| c.what == "paper / dihc: e_mhe")
         .unwrap();
     assert_eq!(check.passed, paper_dihc <= 3.0);
+    // A miss is said in a sentence of the report.
+    if !check.passed {
+        assert!(html.contains(&format!("paper / dihc: e_mhe = {paper_dihc:.2} %")));
+        assert!(html.contains("misses one"));
+    }
     assert!(html.contains("informational"));
     assert!(!html.contains("the paper's (none"));
     assert!(html.contains("no equivalent in the paper"));
