@@ -18,6 +18,7 @@ fn clamps_dict(py: Python<'_>, c: ClampCounts) -> PyResult<Bound<'_, PyDict>> {
             ("dac_clamped", c.dac_clamped),
             ("amplifier_clamped", c.amplifier_clamped),
             ("non_finite", c.non_finite),
+            ("adc_clamped", c.adc_clamped),
         ],
     )
 }
@@ -118,7 +119,10 @@ impl Stage {
         self.inner.seed()
     }
 
-    /// Commands clamped or ignored since the stage was built or reset.
+    /// Samples clamped or ignored since the stage was built or reset: ``dac_clamped`` and
+    /// ``amplifier_clamped`` (commands beyond the DAC's span or the amplifier's rails),
+    /// ``non_finite`` (NaN or infinite commands) and ``adc_clamped`` (readings beyond the ADC's
+    /// span: the measured position saturated).
     #[getter]
     fn clamps<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
         clamps_dict(py, self.inner.clamps())
@@ -213,7 +217,7 @@ impl StageResponse {
         self.measured_position_um.clone_ref(py)
     }
 
-    /// Commands the stage clamped during this run.
+    /// Samples the stage clamped during this run, by the same keys as ``Stage.clamps``.
     #[getter]
     fn clamps<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
         clamps_dict(py, self.clamps)

@@ -19,7 +19,12 @@ def test_stage_runs_a_command_signal_into_a_response():
     assert response.time[0] == 0.0
     assert 10.0 < response.true_position_um.max() < 75.0
     assert response.amplifier_v.max() == pytest.approx(135.0, rel=0.02)
-    assert response.clamps == {"dac_clamped": 0, "amplifier_clamped": 0, "non_finite": 0}
+    assert response.clamps == {
+        "dac_clamped": 0,
+        "amplifier_clamped": 0,
+        "non_finite": 0,
+        "adc_clamped": 0,
+    }
     assert stage.samples == 5000 and stage.time_s == pytest.approx(0.5)
 
 
@@ -62,6 +67,16 @@ def test_stage_refuses_non_finite_commands_and_counts_clamps():
     response = stage.run([20.0, -20.0, 5.0])
     assert response.clamps["dac_clamped"] == 2
     assert stage.full_scale_command_v == 10.0
+
+
+def test_a_sensor_span_below_the_stroke_saturates_and_is_counted():
+    # 0.1 V/um into an ADC of 0 .. 2 V: readings stop at 20 um.
+    stage = hystcomp.Stage("[adc]\nmin_v = 0.0\nmax_v = 2.0\n")
+    response = stage.run(np.linspace(0.0, 8.0, 4000))
+    assert response.true_position_um.max() > 40.0
+    assert response.measured_position_um.max() <= 20.0 + 1e-9
+    over = int(np.sum(response.true_position_um > 20.5))
+    assert over > 0 and response.clamps["adc_clamped"] >= over
 
 
 def test_quasi_static_stroke_is_about_the_nominal_75_um():
