@@ -13,6 +13,26 @@
 
 use crate::Real;
 
+/// [`branch_checkpoints`] with the weight of the moving operators: calls `visit(k, x, b_1 + ...
+/// + b_k)`. The sums come from a running prefix, since `k` only increases.
+fn moving_weight_checkpoints<T: Real>(
+    thresholds: &[T],
+    weights: &[T],
+    lo: T,
+    hi: T,
+    mut visit: impl FnMut(usize, T, T),
+) {
+    let mut summed = 0;
+    let mut prefix = T::zero();
+    branch_checkpoints(thresholds, lo, hi, |k, x| {
+        while summed < k {
+            prefix = prefix + weights[summed];
+            summed += 1;
+        }
+        visit(k, x, prefix);
+    });
+}
+
 /// The smallest branch slope of a model over an input range, and where it occurs.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct BranchSlope<T> {
@@ -81,14 +101,7 @@ pub(crate) fn min_branch_slope<T: Real>(
         input: lo,
         active_operators: 0,
     };
-    // Prefix sums are recomputed per checkpoint from a running cache: k only increases.
-    let mut cached_k = 0;
-    let mut prefix = T::zero();
-    branch_checkpoints(thresholds, lo, hi, |k, x| {
-        while cached_k < k {
-            prefix = prefix + weights[cached_k];
-            cached_k += 1;
-        }
+    moving_weight_checkpoints(thresholds, weights, lo, hi, |k, x, prefix| {
         let slope = a2 + three * a1 * x * x + prefix;
         if slope < worst.slope {
             worst = BranchSlope {
@@ -131,13 +144,7 @@ pub(crate) fn max_delayed_loop_gain<T: Real>(
         input: lo,
         active_operators: 0,
     };
-    let mut cached_k = 0;
-    let mut prefix = T::zero();
-    branch_checkpoints(thresholds, lo, hi, |k, x| {
-        while cached_k < k {
-            prefix = prefix + weights[cached_k];
-            cached_k += 1;
-        }
+    moving_weight_checkpoints(thresholds, weights, lo, hi, |k, x, prefix| {
         let gain = (three * a1 * x * x + prefix).abs() / a2;
         // NaN (a2 = 0) must not hide: it compares false, so test it explicitly.
         if gain > worst.gain || gain.is_nan() {
