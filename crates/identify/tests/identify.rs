@@ -1,6 +1,8 @@
 //! Identification on seeded random synthetic records: exact recovery, optimality under the
 //! constraints, the two solvers of one problem, the core's checks, reports and errors.
 
+mod common;
+
 use hystcomp_core::{Dihc, Ihc, Mpim, OutputLimits, SolveMode, Wihc};
 use hystcomp_identify::{
     CrossvalOptions, FitProblem, IdentifyError, IdentifyOptions, LeastSquares, Method, NoObserver,
@@ -13,7 +15,7 @@ use proptest::test_runner::{Config, RngSeed};
 use rand::{Rng, RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
-type VecMpim = Mpim<f64, Vec<f64>>;
+use common::{VecMpim, excitation, feasible, run};
 
 fn seeded(cases: u32, seed: u64) -> Config {
     Config {
@@ -24,24 +26,6 @@ fn seeded(cases: u32, seed: u64) -> Config {
     }
 }
 
-/// A normalised input in [0, 1]: a full sweep 0 -> 1, then `reversals` random reversal
-/// points joined by steps of at most 0.01, so that every operator reverses at many amplitudes.
-fn excitation(rng: &mut impl Rng, reversals: usize) -> Vec<f64> {
-    let mut points = vec![0.0, 1.0];
-    for _ in 0..reversals {
-        points.push(rng.random::<f64>());
-    }
-    let mut x = vec![0.0];
-    for pair in points.windows(2) {
-        let steps = ((pair[1] - pair[0]).abs() / 0.01).ceil().max(1.0) as usize;
-        for k in 1..=steps {
-            x.push(pair[0] + (pair[1] - pair[0]) * k as f64 / steps as f64);
-        }
-    }
-    x
-}
-
-/// Thresholds (i - 1)/n.
 fn uniform(n: usize) -> Vec<f64> {
     (0..n).map(|i| i as f64 / n as f64).collect()
 }
@@ -70,11 +54,6 @@ fn random_model(rng: &mut impl Rng, n: usize) -> VecMpim {
     .unwrap()
 }
 
-fn run(model: &VecMpim, x: &[f64]) -> Vec<f64> {
-    let mut m = model.clone();
-    x.iter().map(|&v| m.step(v)).collect()
-}
-
 /// The problem identify builds for a normalised record (all samples fitted).
 fn problem(x: &[f64], y: &[f64], n: usize, direction: Direction, offset: bool) -> FitProblem {
     FitProblem::new(
@@ -89,20 +68,6 @@ fn problem(x: &[f64], y: &[f64], n: usize, direction: Direction, offset: bool) -
         1e-3,
     )
     .unwrap()
-}
-
-/// Whether the model meets every plant constraint with the default margin (then it is the
-/// unconstrained optimum of its own noise-free data).
-fn feasible(model: &VecMpim, x: &[f64], direction: Direction) -> bool {
-    let y = run(model, x);
-    let p = problem(x, &y, model.len(), direction, false);
-    let theta = p.theta(&hystcomp_identify::Parameters {
-        a1: model.a1(),
-        a2: model.a2(),
-        weights: model.weights().to_vec(),
-        offset: 0.0,
-    });
-    p.smallest_slack(&theta) > 0.0
 }
 
 fn pso(seed: u64) -> PsoOptions {

@@ -1,62 +1,18 @@
 //! Thresholds that do not start at 0, bipolar inputs, normalisation over the fitted samples
 //! only, and the refusal of fits that cannot describe a piezo actuator.
 
+mod common;
+
 use hystcomp_core::Mpim;
 use hystcomp_identify::{
-    CrossvalOptions, FitProblem, IdentifyError, IdentifyOptions, NoObserver, OutputOffset,
-    Parameters, ProblemData, Record, Thresholds, Warmup, crossval, identify,
+    CrossvalOptions, IdentifyError, IdentifyOptions, NoObserver, OutputOffset, Record, Thresholds,
+    Warmup, crossval, identify,
 };
 use hystcomp_io::model_file::Direction;
 use rand::{Rng, RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
-type VecMpim = Mpim<f64, Vec<f64>>;
-
-/// A normalised input: 0 -> 1, then `reversals` random reversal points, steps <= 0.01.
-fn excitation(rng: &mut impl Rng, reversals: usize) -> Vec<f64> {
-    let mut points = vec![0.0, 1.0];
-    for _ in 0..reversals {
-        points.push(rng.random::<f64>());
-    }
-    let mut x = vec![0.0];
-    for pair in points.windows(2) {
-        let steps = ((pair[1] - pair[0]).abs() / 0.01).ceil().max(1.0) as usize;
-        for k in 1..=steps {
-            x.push(pair[0] + (pair[1] - pair[0]) * k as f64 / steps as f64);
-        }
-    }
-    x
-}
-
-fn run(model: &VecMpim, x: &[f64]) -> Vec<f64> {
-    let mut m = model.clone();
-    x.iter().map(|&v| m.step(v)).collect()
-}
-
-/// Whether `model` meets every constraint of the plant problem on `x` (then it is the
-/// unconstrained optimum of its own noise-free data, and ls must return it).
-fn feasible(model: &VecMpim, x: &[f64]) -> bool {
-    let y = run(model, x);
-    let p = FitProblem::new(
-        ProblemData {
-            input: x,
-            output: &y,
-            fit: 0..x.len(),
-        },
-        model.thresholds(),
-        Direction::Plant,
-        false,
-        1e-3,
-    )
-    .unwrap();
-    let theta = p.theta(&Parameters {
-        a1: model.a1(),
-        a2: model.a2(),
-        weights: model.weights().to_vec(),
-        offset: 0.0,
-    });
-    p.smallest_slack(&theta) > 0.0
-}
+use common::{VecMpim, excitation, feasible, run};
 
 fn random_plant(rng: &mut impl Rng, thresholds: &[f64]) -> VecMpim {
     let weights: Vec<f64> = thresholds
@@ -84,7 +40,7 @@ fn ls_recovers_every_parameter_with_thresholds_not_starting_at_zero() {
         let thresholds: Vec<f64> = (1..=n).map(|i| (i as f64 - 0.5) / n as f64).collect();
         let model = random_plant(&mut rng, &thresholds);
         let x = excitation(&mut rng, 60);
-        if !feasible(&model, &x) {
+        if !feasible(&model, &x, Direction::Plant) {
             continue;
         }
         tested += 1;
@@ -132,7 +88,7 @@ fn a_bipolar_input_is_identified_exactly() {
         let thresholds: Vec<f64> = (0..10).map(|i| i as f64 / 10.0).collect();
         let model = random_plant(&mut rng, &thresholds);
         let x = excitation(&mut rng, 40);
-        if !feasible(&model, &x) {
+        if !feasible(&model, &x, Direction::Plant) {
             continue;
         }
         tested += 1;
@@ -159,7 +115,11 @@ fn ranges_are_those_of_the_fitted_samples() {
     let thresholds: Vec<f64> = (0..10).map(|i| i as f64 / 10.0).collect();
     let model = loop {
         let m = random_plant(&mut rng, &thresholds);
-        if feasible(&m, &excitation(&mut ChaCha8Rng::seed_from_u64(8), 60)) {
+        if feasible(
+            &m,
+            &excitation(&mut ChaCha8Rng::seed_from_u64(8), 60),
+            Direction::Plant,
+        ) {
             break m;
         }
     };
