@@ -189,7 +189,8 @@ pub struct TrackingRun {
     pub measured_um: Vec<f64>,
     /// The indices on the evaluation window, % of the `y_d` range.
     pub indices: TrackingIndices,
-    /// Samples the compensator had to clamp to its limits.
+    /// Samples the compensator clamped to its limits: desired positions out of reach, and for
+    /// the delayed loops also reachable ones where the loop hit a limit (after a jump).
     pub saturated: u64,
     /// RMS difference, over the evaluation window, between the measured position and the
     /// position the compensator's own plant model predicts for the command it sent
@@ -509,7 +510,11 @@ pub fn run_study(
             Some(Method::Dihc),
             Some(&paper_inverse),
         ),
-        ("exact / ihc".into(), Some(Method::Ihc), Some(&exact_plant)),
+        (
+            EXACT_IHC_LABEL.into(),
+            Some(Method::Ihc),
+            Some(&exact_plant),
+        ),
         (
             "exact / wihc".into(),
             Some(Method::Wihc),
@@ -590,7 +595,10 @@ pub fn run_study(
     let extra_seeds: Vec<u64> = (2..2 + NOISE_FLOOR_EXTRA_SEEDS)
         .map(|k| options.seed.wrapping_add(k))
         .collect();
-    let exact_ihc_index = 4; // uncompensated, 3 paper runs, then exact / ihc
+    let exact_ihc_index = runs
+        .iter()
+        .position(|r| r.label == EXACT_IHC_LABEL)
+        .ok_or_else(|| StudyError::Option(format!("no {EXACT_IHC_LABEL} run")))?;
     let mut floor = NoiseFloor {
         seeds: std::iter::once(tracking_seed)
             .chain(extra_seeds.iter().copied())
@@ -732,6 +740,9 @@ pub fn run_study(
     })
 }
 
+/// The label of the exact pipeline's IHC run, which the noise floor and the ablations repeat.
+const EXACT_IHC_LABEL: &str = "exact / ihc";
+
 /// The most trajectory periods the study tracks.
 pub const MAX_STUDY_PERIODS: usize = 20;
 
@@ -805,7 +816,9 @@ fn drive(
         ScaledCompensator::new(&model.model, method, Some((0.0, full_scale))).map_err(error)?;
     let mut out = vec![0.0; desired.len()];
     c.process(desired, &mut out).map_err(error)?;
-    Ok((out, c.diagnostics().saturated))
+    // Unreachable positions, and reachable ones where a delayed loop hit a limit (ringing).
+    let d = c.diagnostics();
+    Ok((out, d.saturated + d.loop_saturated))
 }
 
 /// The measured position of a fresh stage driven by `command_v`, um.

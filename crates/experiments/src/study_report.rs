@@ -537,9 +537,10 @@ pub fn explanations(study: &Study) -> Vec<TextSection> {
                 "the inverse MPIM (position -> voltage) fits the identification record {:.1} \
                  times worse than the plant MPIM ({inverse_fit:.3} % of the voltage range \
                  against {plant_fit:.3} % of the position range, both least-squares optima): \
-                 ten one-sided play operators and a cubic describe this stage's inverse \
+                 {} one-sided play operators and a cubic describe this stage's inverse \
                  hysteresis less well than its forward hysteresis",
-                inverse_fit / plant_fit
+                inverse_fit / plant_fit,
+                study.options.operators
             )
         } else {
             format!(

@@ -105,6 +105,16 @@ fn default_study_meets_the_acceptance_bounds_and_writes_a_report_chromium_shows(
     assert!(floor.e_rms_spread_percent > 0.0 && floor.e_rms_spread_percent < 0.01);
     assert!(floor.e_mhe_spread_percent > 0.0 && floor.e_mhe_spread_percent < 0.2);
     assert!(html.contains(&format!("{:.4} points", floor.e_rms_spread_percent)));
+    // The count of stage runs the periods' cap speaks of is the study's own: the tracking
+    // runs, two replays per extra noise seed, the ablations beyond the baseline.
+    assert_eq!(
+        hystcomp_experiments::study::TRACKING_RUNS,
+        1 + study.pipelines.iter().map(|p| p.runs.len()).sum::<usize>()
+            + study.cross_runs.len()
+            + 2 * (floor.seeds.len() - 1)
+            + study.ablations.len()
+            - 1
+    );
     // The ablations come from runs: switching creep off changes the result (creep is
     // configured), switching everything off leaves less error than the baseline, and each
     // row's numbers are in the report and in study.json.
