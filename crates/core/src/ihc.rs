@@ -2,7 +2,7 @@
 
 use crate::compensator::OutputGuard;
 use crate::solve::increasing_cubic_root;
-use crate::walk::{PlayBank, SegmentEquation};
+use crate::walk::{PlayBank, SegmentEquation, rounding_tolerance};
 use crate::{Buffer, Compensator, CoreError, Diagnostics, Mpim, OutputLimits, Real, SolveMode};
 
 /// IHC, section 3.1: the inverse of the identified plant MPIM in the feedforward path,
@@ -13,6 +13,11 @@ use crate::{Buffer, Compensator, CoreError, Diagnostics, Mpim, OutputLimits, Rea
 ///   `w + a1 (P1^{-1}[w](t))^3 = y_d(t)` is solved exactly each sample, so that the plant model
 ///   gives `P[v](t) = y_d(t)`.
 /// - [`SolveMode::Delayed`]: `w(t) = y_d(t) - a1 v^3(t - Ts)`, as real-time implementations do.
+///   Cost: a sample where the delayed solve hits an output limit also runs the exact solve of
+///   eq. (5) from the same state, only to classify the clamp (reachable:
+///   [`Diagnostics::loop_saturated`]; not: [`Diagnostics::saturated`]), so it costs about one
+///   exact step more. The worst case per sample is the delayed step plus the exact step;
+///   real-time budgets should use that bound.
 ///
 /// See [`Compensator`] for the output guarantees.
 #[derive(Debug, Clone)]
@@ -82,9 +87,7 @@ impl<T: Real> SegmentEquation<T> for Eq5Exact<T> {
     fn rounding(&self, w: T, alpha: T, beta: T) -> T {
         let v = alpha * w + beta;
         let terms = w.abs() + (self.a1 * v * v * v).abs() + self.desired.abs();
-        // Absolute as well as relative: the desired position itself carries the rounding of
-        // the plant model that produced it (sums of b_i w_i).
-        T::epsilon() * T::from_f64(256.0) * (T::one() + terms)
+        rounding_tolerance(terms)
     }
     #[inline(always)]
     fn root(&self, lo: T, hi: T, f_lo: T, f_hi: T, alpha: T, beta: T, inv_alpha: T) -> T {

@@ -145,7 +145,7 @@ pub(crate) fn max_delayed_loop_gain<T: Real>(
         active_operators: 0,
     };
     moving_weight_checkpoints(thresholds, weights, lo, hi, |k, x, prefix| {
-        let gain = (three * a1 * x * x + prefix).abs() / a2;
+        let gain = delayed_loop_gain_at(three, a1, a2, x, prefix);
         // NaN (a2 = 0) must not hide: it compares false, so test it explicitly.
         if gain > worst.gain || gain.is_nan() {
             worst = LoopGain {
@@ -156,4 +156,34 @@ pub(crate) fn max_delayed_loop_gain<T: Real>(
         }
     });
     worst
+}
+
+/// The delayed WIHC's small-signal loop gain `|3 a1 x^2 + b_1 + ... + b_k| / a2` (eq. (9) with
+/// `H[v](t - Ts)`) at `x`, given the moving operators' weight `b_1 + ... + b_k` and `three = 3`.
+#[inline]
+fn delayed_loop_gain_at<T: Real>(three: T, a1: T, a2: T, x: T, moving_weight: T) -> T {
+    (three * a1 * x * x + moving_weight).abs() / a2
+}
+
+/// Calls `visit(gain, x)` with the delayed WIHC's loop gain at the checkpoints of
+/// [`branch_checkpoints`] for the branch around a reversal, where only the always-moving
+/// (zero-threshold) operators move (`k` = their number, the first `k` the walk visits). The
+/// same walk and formula as [`max_delayed_loop_gain`], restricted to that `k`; the points come
+/// in the walk's order: `min(lo, 0)`, `max(hi, 0)`, then 0 when it lies strictly between.
+pub(crate) fn reversal_loop_gains<T: Real>(
+    thresholds: &[T],
+    weights: &[T],
+    a1: T,
+    a2: T,
+    lo: T,
+    hi: T,
+    mut visit: impl FnMut(T, T),
+) {
+    let three = T::from_f64(3.0);
+    let always = thresholds.iter().take_while(|r| **r <= T::zero()).count();
+    moving_weight_checkpoints(thresholds, weights, lo, hi, |k, x, prefix| {
+        if k == always {
+            visit(delayed_loop_gain_at(three, a1, a2, x, prefix), x);
+        }
+    });
 }

@@ -34,16 +34,25 @@ pub(crate) trait SegmentEquation<T: Real> {
     fn input_at_control(&self, v: T, alpha: T, beta: T) -> T {
         (v - beta) / alpha
     }
-    /// The root of the residual in `[lo, hi]`, given its values at both ends (`f_lo <= 0 <= f_hi`);
-    /// `inverse_alpha` is `1 / alpha`, from a table.
     /// How far below zero (rising) or above zero (falling) the residual at a limit may be and
     /// still count as reached: rounding of its terms. By default 0 (strict).
     #[inline(always)]
     fn rounding(&self, _x: T, _alpha: T, _beta: T) -> T {
         T::zero()
     }
+    /// The root of the residual in `[lo, hi]`, given its values at both ends (`f_lo <= 0 <= f_hi`);
+    /// `inverse_alpha` is `1 / alpha`, from a table.
     #[allow(clippy::too_many_arguments)]
     fn root(&self, lo: T, hi: T, f_lo: T, f_hi: T, alpha: T, beta: T, inverse_alpha: T) -> T;
+}
+
+/// The rounding allowance of a residual that sums terms of total magnitude `terms`:
+/// `256 eps (1 + terms)`, absolute as well as relative, because the desired position itself
+/// carries the rounding of the plant model that produced it (sums of `b_i w_i`, eqs. (2), (5)
+/// and (9)). Shared by the exact IHC and WIHC equations.
+#[inline(always)]
+pub(crate) fn rounding_tolerance<T: Real>(terms: T) -> T {
+    T::epsilon() * T::from_f64(256.0) * (T::one() + terms)
 }
 
 /// A linear piece of the bank: its output is `alpha x + beta` there, with the first `moving`

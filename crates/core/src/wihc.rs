@@ -1,9 +1,9 @@
 //! Without-inverse hysteresis compensation (WIHC), eq. (9).
 
 use crate::compensator::OutputGuard;
-use crate::invertibility::max_delayed_loop_gain;
+use crate::invertibility::{max_delayed_loop_gain, reversal_loop_gains};
 use crate::solve::increasing_cubic_root;
-use crate::walk::{PlayBank, SegmentEquation};
+use crate::walk::{PlayBank, SegmentEquation, rounding_tolerance};
 use crate::{
     Buffer, Compensator, CoreError, Diagnostics, LoopGain, Mpim, OutputLimits, Real, SolveMode,
 };
@@ -20,9 +20,11 @@ use crate::{
 ///   - Around a reversal only the zero-threshold operators move; the constructor refuses a
 ///     model whose gain there reaches 1 ([`CoreError::DelayedWihcUnstable`]).
 ///   - After a jump in `y_d` the loop swings over a wide range and more operators move. Its
-///     worst case over the limits is [`Wihc::delayed_loop_gain`]. Below 1 the loop settles
-///     within a few tens of samples (the error shrinks at least by that factor each sample):
-///     the model's position then follows `y_d`, and once the trajectory has swept past the
+///     worst case over the limits is [`Wihc::delayed_loop_gain`] `g`. Below 1 the loop
+///     contracts: in the small-signal picture its error shrinks by at least the factor `g` each
+///     sample, so settling to a fraction `eps` of the jump takes about `ln(eps) / ln(g)`
+///     samples (a few for `g = 0.3`, about 460 for `g = 0.99` and `eps = 0.01`; many more as
+///     `g` nears 1). Once settled the model's position follows `y_d`, and once the trajectory has swept past the
 ///     range of the settling its drive follows the exact WIHC's, both to within a gap that
 ///     shrinks with the sampling rate. At or above 1 (Table 1 of the paper: 1.66, all
 ///     ten operators moving near `x = 0`) it can ring between the output limits: from rest at
@@ -36,6 +38,12 @@ use crate::{
 ///   On smooth trajectories sampled fast, started from a consistent state (the study:
 ///   10 kHz, 1 Hz, from rest at the trajectory's start) it stays within a fraction of a
 ///   sample's step of the exact solution. Prefer [`SolveMode::Exact`].
+///
+///   Cost: a clamped delayed sample also runs one exact solve of eq. (9) from the same state,
+///   only to classify the clamp (reachable: [`Diagnostics::loop_saturated`]; not:
+///   [`Diagnostics::saturated`]), so it costs about one exact step more. The worst case per
+///   sample is the delayed step plus the exact step; real-time budgets should use that bound
+///   (the loop can clamp on many consecutive samples while it rings).
 ///
 /// See [`Compensator`] for the output guarantees.
 #[derive(Debug, Clone)]
@@ -109,35 +117,32 @@ impl<T: Real, B: Buffer<T>> Wihc<T, B> {
     }
 }
 
-/// The small-signal gain of the delayed loop must be below 1 everywhere in the range.
+/// Around a reversal only the zero-threshold operators move: the delayed loop's gain on that
+/// branch, `|3 a1 x^2 + b_1 + ... + b_k| / a2` with `k` the number of zero-threshold operators
+/// (eq. (9) with `H[v](t - Ts)`), must be below 1 over the whole range. The first checkpoint
+/// (in the order of [`reversal_loop_gains`]) where it is not is reported.
 fn check_delayed_contraction<T: Real, B: Buffer<T>>(
     plant: &Mpim<T, B>,
     limits: OutputLimits<T>,
 ) -> Result<(), CoreError> {
-    let zero_weights = plant
-        .thresholds()
-        .iter()
-        .zip(plant.weights())
-        .take_while(|(r, _)| **r <= T::zero())
-        .fold(T::zero(), |s, (_, b)| s + *b);
-    let three = T::from_f64(3.0);
-    let lo = limits.min().min(T::zero());
-    let hi = limits.max().max(T::zero());
-    // |3 a1 x^2 + c| is largest at the smallest or largest x^2.
-    let mut candidates = [lo, hi, T::zero()];
-    if !(lo < T::zero() && T::zero() < hi) {
-        candidates[2] = lo;
-    }
-    for x in candidates {
-        let ratio = (three * plant.a1() * x * x + zero_weights).abs() / plant.a2();
-        if ratio.is_nan() || ratio >= T::one() {
-            return Err(CoreError::DelayedWihcUnstable {
-                ratio: ratio.to_f64(),
-                input: x.to_f64(),
-            });
-        }
-    }
-    Ok(())
+    let mut failure = None;
+    reversal_loop_gains(
+        plant.thresholds(),
+        plant.weights(),
+        plant.a1(),
+        plant.a2(),
+        limits.min(),
+        limits.max(),
+        |ratio, x| {
+            if failure.is_none() && (ratio.is_nan() || ratio >= T::one()) {
+                failure = Some(CoreError::DelayedWihcUnstable {
+                    ratio: ratio.to_f64(),
+                    input: x.to_f64(),
+                });
+            }
+        },
+    );
+    failure.map_or(Ok(()), Err)
 }
 
 /// `a1 v^3 + (a2 + sum of moving b) v + beta = y_d` on one segment, in the voltage `v` itself.
@@ -163,9 +168,7 @@ impl<T: Real> SegmentEquation<T> for Eq9<T> {
     fn rounding(&self, x: T, alpha: T, beta: T) -> T {
         let terms =
             (self.a1 * x * x * x).abs() + (alpha * x).abs() + beta.abs() + self.desired.abs();
-        // Absolute as well as relative: the desired position itself carries the rounding of
-        // the plant model that produced it (sums of b_i w_i).
-        T::epsilon() * T::from_f64(256.0) * (T::one() + terms)
+        rounding_tolerance(terms)
     }
     #[inline(always)]
     fn root(&self, lo: T, hi: T, f_lo: T, f_hi: T, alpha: T, beta: T, _inv: T) -> T {
