@@ -386,24 +386,37 @@ proptest! {
     /// When a delayed loop clamps its output, it says whether the desired position was
     /// reachable within the limits from the plant's state (the plant model fed the emitted
     /// controls; a bisection on its branch as reference): `loop_saturated` if so, `saturated`
-    /// if not. Partly unreachable random trajectories with jumps.
+    /// if not. Partly unreachable random trajectories with jumps. Every case checks both loops:
+    /// the delayed IHC on a random invertible model (it always builds), the delayed WIHC on the
+    /// same model when its reversal gain allows, else on a model whose loop gain is below 1.
     #[test]
     fn delayed_loops_classify_their_clamped_samples(seed in any::<u64>(), n in 1usize..12) {
         let mut rng = rng(seed);
         let plant = random_invertible_model(&mut rng, n);
         let limits = OutputLimits::new(0.0, 1.0).unwrap();
-        let lo = plant.clone().step(0.0) - 0.2;
-        let hi = plant.clone().step(1.0) + 0.2;
-        let desired = random_input(&mut rng, 400, lo, hi);
-        let mut compensators: Vec<(&str, Box<dyn Compensator<f64>>)> = Vec::new();
-        if let Ok(c) = Ihc::<f64, Vec<f64>>::new(&plant, limits, SolveMode::Delayed) {
-            compensators.push(("ihc-delayed", Box::new(c)));
-        }
-        if let Ok(c) = Wihc::<f64, Vec<f64>>::new(&plant, limits, SolveMode::Delayed) {
-            compensators.push(("wihc-delayed", Box::new(c)));
-        }
-        for (name, c) in compensators.iter_mut() {
-            let mut state = plant.clone();
+        let ihc = Ihc::<f64, Vec<f64>>::new(&plant, limits, SolveMode::Delayed);
+        prop_assert!(ihc.is_ok(), "delayed IHC refused an invertible model: {:?}", ihc.err());
+        let (wihc_plant, wihc) = match Wihc::<f64, Vec<f64>>::new(&plant, limits, SolveMode::Delayed) {
+            Ok(c) => (plant.clone(), c),
+            Err(_) => {
+                let contracting = random_model_with_gain_below(&mut rng, n, 0.9);
+                let c = Wihc::<f64, Vec<f64>>::new(&contracting, limits, SolveMode::Delayed);
+                prop_assert!(c.is_ok(), "delayed WIHC refused gain < 1: {:?}", c.err());
+                (contracting, c.unwrap())
+            }
+        };
+        let mut compensators: Vec<(&str, VecMpim, Box<dyn Compensator<f64>>)> = vec![
+            ("ihc-delayed", plant.clone(), Box::new(ihc.unwrap())),
+            ("wihc-delayed", wihc_plant, Box::new(wihc)),
+        ];
+        let mut checked = 0;
+        for (name, model, c) in compensators.iter_mut() {
+            // A fifth of the reach beyond each end (the contracting models' reach can be wide).
+            let (reach_0, reach_1) = (model.clone().step(0.0), model.clone().step(1.0));
+            let lo = reach_0 - 0.2 * (reach_1 - reach_0).max(1.0);
+            let hi = reach_1 + 0.2 * (reach_1 - reach_0).max(1.0);
+            let desired = random_input(&mut rng, 400, lo, hi);
+            let mut state = model.clone();
             let mut before = c.diagnostics();
             for (k, &y_d) in desired.iter().enumerate() {
                 let reach_lo = state.branch_output(0.0);
@@ -424,9 +437,11 @@ proptest! {
                     <= before.saturated + before.loop_saturated + 1);
                 before = after;
             }
+            checked += 1;
             // Far beyond the reach: the out-of-range samples are counted as such.
             prop_assert!(c.diagnostics().saturated > 0, "{}: {:?}", name, c.diagnostics());
         }
+        prop_assert_eq!(checked, 2);
     }
 
     /// With a moving-branch loop gain below 1, the delayed WIHC started by a jump in y_d (from
