@@ -69,10 +69,12 @@ fn time(samples: usize, repeats: usize, mut run: impl FnMut()) -> (f64, f64) {
     (per_sample[per_sample.len() / 2], per_sample[0])
 }
 
-/// One period of the paper's trajectory (section 4.3) mapped onto the normalised voltage range
-/// 0.1 .. 0.9, through `plant`: every desired sample is reachable. It rises smoothly from rest
-/// over its first tenth, as a stage starts, so that no compensator starts with a jump (after
-/// which a delayed WIHC with a loop gain above 1 rings for a while).
+/// One period of the paper's trajectory (section 4.3) as normalised voltages, through `plant`:
+/// every desired sample is reachable. The trajectory is mapped onto 0.1 .. 0.9 and multiplied by
+/// a half-cosine ramp from 0 to 1 over its first tenth, so the voltage starts at rest (0), rises
+/// smoothly as a stage starts, and stays within 0.1 .. 0.9 after the first tenth (0 .. 0.9
+/// overall). No compensator starts with a jump, after which a delayed WIHC with a loop gain
+/// above 1 rings for a while. Returns the voltages and the desired positions.
 fn trajectory<T: Real>(plant: &Mpim<T, Vec<T>>, samples: usize) -> (Vec<T>, Vec<T>) {
     let reference = Reference::paper();
     let [lo, hi] = reference.trajectory.range_um;
