@@ -260,6 +260,40 @@ fn evaluate_computes_the_three_indices_and_refuses_bad_records() {
         ],
         "bin",
     );
+    // A MAT-file without the simulator's column needs --measured-column.
+    let mat = std::path::PathBuf::from(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../io/tests/fixtures/scipy_record.mat"
+    ));
+    fails(
+        &[
+            "evaluate",
+            "--desired",
+            s(&mat),
+            "--desired-column",
+            "u",
+            "--measured",
+            s(&mat),
+        ],
+        "no --measured-column given, and no variable measured_position_um",
+    );
+    let o = hystcomp(&[
+        "evaluate",
+        "--desired",
+        s(&mat),
+        "--desired-column",
+        "u",
+        "--measured",
+        s(&mat),
+        "--measured-column",
+        "u",
+        "--bins",
+        "1",
+        "--json",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let json: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert_eq!(json["e_rms_percent"].as_f64(), Some(0.0));
     // Too many bins: refused (not an allocation abort, not a silently low e_mhe).
     for bins in ["100000000000000", "100000", "201"] {
         fails(
@@ -285,7 +319,8 @@ fn evaluate_computes_the_three_indices_and_refuses_bad_records() {
             "--bins",
             "201",
         ],
-        "2000 samples support at most 200 e_mhe bins",
+        "201 e_mhe bins for 2000 samples: with fewer than 10 samples per bin on average many \
+         bins hold one sample or none and e_mhe underestimates the loop; use at most 200 bins",
     );
     let o = hystcomp(&[
         "evaluate",

@@ -10,15 +10,28 @@ use core::fmt;
 /// perfectly single-valued map; the report states the bin count beside every e_mhe figure.
 pub const DEFAULT_MHE_BINS: usize = 100;
 
-/// The fewest samples per e_mhe bin, on average, that `hystcomp evaluate` and the study
-/// accept: with fewer, many bins hold one sample or none and e_mhe (the widest spread
-/// inside a bin) underestimates the loop. [`e_mhe_percent`] itself only refuses more bins
-/// than samples.
+/// The fewest samples per e_mhe bin, on average, that [`e_mhe_percent`] accepts: with fewer,
+/// many bins hold one sample or none and e_mhe (the widest spread inside a bin)
+/// underestimates the loop.
 pub const MIN_SAMPLES_PER_BIN: usize = 10;
 
-/// The most e_mhe bins `samples` samples support at [`MIN_SAMPLES_PER_BIN`] per bin.
+/// The most e_mhe bins `samples` samples support at [`MIN_SAMPLES_PER_BIN`] per bin (one bin
+/// at least: the whole loop's width).
 pub fn max_mhe_bins(samples: usize) -> usize {
-    samples / MIN_SAMPLES_PER_BIN
+    (samples / MIN_SAMPLES_PER_BIN).max(1)
+}
+
+/// Checks that `bins` e_mhe bins suit `samples` samples: at least one bin, and at least
+/// [`MIN_SAMPLES_PER_BIN`] samples per bin on average. [`e_mhe_percent`] applies it; callers
+/// that know the sample count before a long computation can apply it first.
+pub fn check_mhe_bins(bins: usize, samples: usize) -> Result<(), IndexError> {
+    if bins == 0 {
+        return Err(IndexError::NoBins);
+    }
+    if bins > max_mhe_bins(samples) {
+        return Err(IndexError::TooManyBins { bins, samples });
+    }
+    Ok(())
 }
 
 /// Why the indices of a pair of records could not be computed.
@@ -44,7 +57,7 @@ pub enum IndexError {
     ConstantDesired,
     /// Fewer than one bin asked for.
     NoBins,
-    /// More bins than samples.
+    /// More bins than the samples support ([`max_mhe_bins`]).
     TooManyBins {
         /// Bins asked for.
         bins: usize,
@@ -76,11 +89,11 @@ impl fmt::Display for IndexError {
             IndexError::NoBins => write!(f, "e_mhe needs at least one bin"),
             IndexError::TooManyBins { bins, samples } => write!(
                 f,
-                "{bins} e_mhe bins for {samples} samples: most bins would hold one sample or \
-                 none and e_mhe would be meaningless; use at most {} bins ({} samples per bin \
-                 on average)",
-                max_mhe_bins(*samples).max(1),
-                MIN_SAMPLES_PER_BIN
+                "{bins} e_mhe bins for {samples} samples: with fewer than {} samples per bin \
+                 on average many bins hold one sample or none and e_mhe underestimates the \
+                 loop; use at most {} bins",
+                MIN_SAMPLES_PER_BIN,
+                max_mhe_bins(*samples)
             ),
         }
     }
@@ -165,16 +178,8 @@ pub fn e_rms_percent(desired: &[f64], measured: &[f64]) -> Result<f64, IndexErro
 /// `y_d` map. The `y_d` range is cut into `bins` equal bins; in each bin with at least two
 /// samples the width is `max y - min y`; the largest width is divided by `max y_d - min y_d`.
 pub fn e_mhe_percent(desired: &[f64], measured: &[f64], bins: usize) -> Result<f64, IndexError> {
-    if bins == 0 {
-        return Err(IndexError::NoBins);
-    }
     let (lo, hi) = desired_range(desired, measured)?;
-    if bins > desired.len() {
-        return Err(IndexError::TooManyBins {
-            bins,
-            samples: desired.len(),
-        });
-    }
+    check_mhe_bins(bins, desired.len())?;
     let mut low = vec![f64::INFINITY; bins];
     let mut high = vec![f64::NEG_INFINITY; bins];
     let mut count = vec![0usize; bins];

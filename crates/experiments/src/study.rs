@@ -32,9 +32,7 @@ use hystcomp_stage::{Stage, StageConfig, StageError, quasi_static_stroke_um};
 use serde::Serialize;
 
 use crate::excitation::IdentificationExcitation;
-use crate::indices::{
-    DEFAULT_MHE_BINS, IndexError, MIN_SAMPLES_PER_BIN, TrackingIndices, max_mhe_bins,
-};
+use crate::indices::{DEFAULT_MHE_BINS, IndexError, TrackingIndices, check_mhe_bins};
 use crate::{MultisineTrajectory, Reference};
 
 /// Particle swarm iterations of the study's `paper` pipeline.
@@ -64,7 +62,7 @@ pub struct StudyOptions {
     /// iterations rather than the 200 of the crate's default: on this problem the swarm is still
     /// far from the optimum after 200 (see the convergence in the report).
     pub pso: PsoOptions,
-    /// Bins of the `y_d` range for e_mhe (at most one per [`MIN_SAMPLES_PER_BIN`] samples of
+    /// Bins of the `y_d` range for e_mhe (at most one per [`crate::indices::MIN_SAMPLES_PER_BIN`] samples of
     /// the evaluated period).
     pub mhe_bins: usize,
 }
@@ -460,14 +458,9 @@ pub fn run_study(
     let per_period = (period_s * fs).round() as usize;
     let (time_s, desired) = trajectory.sample(fs, samples);
     let evaluation_start = samples - per_period;
-    if options.mhe_bins == 0 || options.mhe_bins > max_mhe_bins(per_period) {
-        return Err(StudyError::Option(format!(
-            "{} e_mhe bins for the {per_period} samples of the evaluated period: use 1 to {} \
-             bins (at least {MIN_SAMPLES_PER_BIN} samples per bin on average)",
-            options.mhe_bins,
-            max_mhe_bins(per_period)
-        )));
-    }
+    // Checked now, before the runs, by the rule e_mhe applies.
+    check_mhe_bins(options.mhe_bins, per_period)
+        .map_err(|e| StudyError::Option(format!("the evaluated period (one per run): {e}")))?;
     let stroke_um = quasi_static_stroke_um(&options.stage)?;
     let desired_max = desired.iter().copied().fold(f64::NEG_INFINITY, f64::max);
     if stroke_um.is_nan() || stroke_um < desired_max {

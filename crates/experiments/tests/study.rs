@@ -290,7 +290,7 @@ fn bad_options_are_refused_with_the_reason() {
             mhe_bins: 10_001,
             ..StudyOptions::default()
         })
-        .contains("use 1 to 10000 bins")
+        .contains("use at most 10000 bins")
     );
     let mut options = StudyOptions::default();
     options.stage.hysteresis.preisach.stroke_um = 30.0;

@@ -3,7 +3,7 @@
 use std::path::PathBuf;
 
 use hystcomp_experiments::TrackingIndices;
-use hystcomp_experiments::indices::{DEFAULT_MHE_BINS, MIN_SAMPLES_PER_BIN, max_mhe_bins};
+use hystcomp_experiments::indices::DEFAULT_MHE_BINS;
 use hystcomp_io::data::{self, Column, DataError, Delimiter, Header, ReadOptions, RowRange};
 use serde::Serialize;
 
@@ -121,8 +121,15 @@ pub fn run(args: &Args, ctx: Context) -> Result<(), CliError> {
         None => {
             let named = Column::Name(SIMULATE_MEASURED.to_string());
             match read(&args.measured, &named, time, &options) {
+                // No such column in a text file: the second column. A MAT-file's variables
+                // have no order, so there the name must be given.
                 Err(DataError::NoSuchColumn { .. }) => {
                     read(&args.measured, &Column::Index(2), time, &options)?
+                }
+                Err(error @ DataError::NoSuchVariable { .. }) => {
+                    return Err(CliError::from(error).context(format!(
+                        "no --measured-column given, and no variable {SIMULATE_MEASURED} to                          take by default"
+                    )));
                 }
                 other => other?,
             }
@@ -140,16 +147,6 @@ pub fn run(args: &Args, ctx: Context) -> Result<(), CliError> {
             args.desired.display()
         ))
     })?;
-    if args.bins > max_mhe_bins(d.len()) {
-        return Err(CliError::input(format!(
-            "--bins {}: {} samples support at most {} e_mhe bins (at least {MIN_SAMPLES_PER_BIN} \
-             samples per bin on average; with fewer, bins hold one sample or none and e_mhe \
-             underestimates the loop); lower --bins or evaluate more rows",
-            args.bins,
-            d.len(),
-            max_mhe_bins(d.len())
-        )));
-    }
     let range = d
         .iter()
         .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &v| {
