@@ -11,9 +11,9 @@ use hystcomp_io::data::{check_finite, check_min_samples, check_not_constant, che
 use hystcomp_io::model_file::{Direction, ModelFile};
 use serde::{Deserialize, Serialize};
 
-use crate::identification::{auto_warmup, min_max, minimum_fit_samples};
+use crate::identification::{auto_warmup, min_max, minimum_fit_samples, parameter_count};
 use crate::report::{ErrorStats, FitReport};
-use crate::{IdentifyError, IdentifyOptions, Observer, Warmup, identify_observed};
+use crate::{IdentifyError, IdentifyOptions, Observer, OutputOffset, Warmup, identify_observed};
 
 /// One record: the drive voltage and the measured displacement, one pair per sample.
 #[derive(Debug, Clone, Copy)]
@@ -60,8 +60,14 @@ pub struct Replay {
     /// voltage range there. `None` when the compensator could not be built.
     pub error: Option<ErrorStats>,
     /// Samples of the evaluated span whose desired position could not be reached within the
-    /// output limits (or lay outside a DIHC model's input range).
+    /// output limits (or lay outside a DIHC model's input range): the output was clamped.
     pub saturated: u64,
+    /// Samples of the evaluated span clamped to a limit although the desired position was
+    /// reachable: a one-sample-delayed loop (`ihc-delayed`, `wihc-delayed`) lagged or rang
+    /// after a jump (the core's `Diagnostics::loop_saturated`). Never counted in `saturated`;
+    /// the samples at a limit are `saturated + loop_saturated`.
+    #[serde(default)]
+    pub loop_saturated: u64,
     /// Why the compensator could not be built, if it could not.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub failure: Option<String>,
@@ -165,8 +171,10 @@ pub fn crossval(
 ///
 /// Everything starts from its reset state at the first sample; errors are taken after the
 /// warm-up, over at least as many samples as identifying the plant model needs
-/// ([`SAMPLES_PER_PARAMETER`](crate::SAMPLES_PER_PARAMETER) per parameter, `n + 3`
-/// parameters; fewer give [`IdentifyError::Data`]).
+/// ([`SAMPLES_PER_PARAMETER`](crate::SAMPLES_PER_PARAMETER) per parameter, counted as
+/// [`identify`](crate::identify) counts them: `a1`, `a2` and the `n` weights, less one when
+/// `r_1 = 0`, plus the output offset when the plant model's report says it was fitted or the
+/// model has no report; fewer give [`IdentifyError::Data`]).
 pub fn validate_models(
     plant: &ModelFile,
     inverse: &ModelFile,
@@ -200,14 +208,14 @@ pub fn validate_models(
             reason: format!("the test record has only {samples} samples; give a shorter warm-up"),
         });
     }
-    let parameters = plant.thresholds.len() + 3;
+    let parameters = parameter_count(&plant.thresholds, offset_fitted(plant));
     let needed = minimum_fit_samples(parameters);
     check_min_samples(
         needed,
         samples - start,
         &format!(
             "a validation on the test record (as many as identifying a model with {} play \
-             operator(s) needs; after a test warm-up of {start} of its {samples} samples: give \
+             operator(s), {parameters} parameters, needs; after a test warm-up of {start} of its {samples} samples: give \
              more rows or a shorter --test-warmup)",
             plant.thresholds.len()
         ),
@@ -246,19 +254,21 @@ pub fn validate_models(
                     compensator: method.name().to_owned(),
                     error: None,
                     saturated: 0,
+                    loop_saturated: 0,
                     failure: Some(e.to_string()),
                 });
                 continue;
             }
         };
         let mut voltage = Vec::with_capacity(samples);
-        let mut saturated_before = 0;
+        let mut before = compensator.diagnostics();
         for (k, &y_d) in test.displacement.iter().enumerate() {
             if k == start {
-                saturated_before = compensator.diagnostics().saturated;
+                before = compensator.diagnostics();
             }
             voltage.push(compensator.step(y_d));
         }
+        let after = compensator.diagnostics();
         replay.push(Replay {
             compensator: method.name().to_owned(),
             error: ErrorStats::new(
@@ -266,7 +276,8 @@ pub fn validate_models(
                 &test.voltage[span.clone()],
                 voltage_range,
             ),
-            saturated: compensator.diagnostics().saturated - saturated_before,
+            saturated: after.saturated - before.saturated,
+            loop_saturated: after.loop_saturated - before.loop_saturated,
             failure: None,
         });
     }
@@ -280,6 +291,18 @@ pub fn validate_models(
         forward,
         replay,
     })
+}
+
+/// Whether the plant model's output offset was fitted, from the report in its
+/// `identification` field; `true` (the default of [`IdentifyOptions`], and the larger count)
+/// when the model has no readable report.
+fn offset_fitted(plant: &ModelFile) -> bool {
+    plant
+        .identification
+        .as_ref()
+        .and_then(|report| report.get("offset_mode"))
+        .and_then(|mode| serde_json::from_value::<OutputOffset>(mode.clone()).ok())
+        .is_none_or(|mode| mode == OutputOffset::Fit)
 }
 
 /// `max - min`, or 1 for a constant span (so that percentages stay finite).

@@ -98,8 +98,7 @@ pub fn identify_observed(
         };
     let thresholds = options.thresholds.values()?;
     let fit_offset = options.offset == OutputOffset::Fit;
-    let parameters_count =
-        thresholds.len() + 2 - usize::from(thresholds[0] == 0.0) + usize::from(fit_offset);
+    let parameters_count = parameter_count(&thresholds, fit_offset);
     let total = input.len();
     let warmup = match options.warmup {
         Warmup::Auto => auto_warmup(voltage),
@@ -120,11 +119,11 @@ pub fn identify_observed(
         ),
     )?;
     let fit = warmup..warmup + fit_samples;
-    check_rises(&voltage[fit.clone()], &displacement[fit.clone()])?;
 
     // Normalisation over the fitted samples only: the warm-up is a transient the model is not
     // fitted to, and the hold-out must not inform the model (its samples may fall outside
-    // [0, 1], where the model extrapolates).
+    // [0, 1], where the model extrapolates). A span constant there is refused first: its
+    // correlation is undefined, and "does not rise" would send the user to the wrong cause.
     let (x_min, x_max) = min_max(&input[fit.clone()]);
     let (y_min, y_max) = min_max(&output[fit.clone()]);
     let x_scale = x_max - x_min;
@@ -141,6 +140,7 @@ pub fn identify_observed(
             });
         }
     }
+    check_rises(&voltage[fit.clone()], &displacement[fit.clone()])?;
     let y_reference = match options.offset {
         OutputOffset::Fit | OutputOffset::None => y_min,
         OutputOffset::Value(v) => v,
@@ -256,7 +256,8 @@ pub fn identify_observed(
         holdout: holdout_stats,
         condition_number: problem.condition_number(),
         constraints: problem.constraints().len(),
-        active_constraints: problem.active_count(&solution.theta, ACTIVE_TOLERANCE),
+        active_constraints: problem.active_count(&solution.theta),
+        violated_constraints: problem.violated_count(&solution.theta),
         margin: options.margin,
         min_branch_slope: slope.slope,
         pso: match &options.method {
@@ -290,11 +291,12 @@ pub fn identify_observed(
     })
 }
 
-/// A constraint counts as active in the report when its slack is at most this (normalised
-/// slope units, where the data's mean slope is 1): far below the default margin (1e-3), far
-/// above the rounding of the exact active-set solve, and above the interior-point solver's
-/// distance from the boundary when its answer is kept.
-const ACTIVE_TOLERANCE: f64 = 1e-6;
+/// The number of parameters the fit of a model with these `thresholds` estimates: `a1`, `a2`
+/// and one weight per threshold, less one when `r_1 = 0` (then only `a2 + b_1` is determined,
+/// see [`FitProblem`]), plus the output offset `c` when it is fitted.
+pub(crate) fn parameter_count(thresholds: &[f64], fit_offset: bool) -> usize {
+    thresholds.len() + 2 - usize::from(thresholds.first() == Some(&0.0)) + usize::from(fit_offset)
+}
 
 /// The fewest fitting samples a model with `parameters` parameters needs:
 /// [`SAMPLES_PER_PARAMETER`] per parameter (and at least one more than the parameters).

@@ -18,8 +18,12 @@
 //! - plant models, **beyond that**: the play-operator part `a2 + b_1 + ... + b_k >= margin`
 //!   for every `k`, so that the analytic inverse of eq. (7) exists and IHC can be built, and
 //!   `|3 a1 x^2 + b_1| <= a2 - margin` over the range, so that the one-sample-delayed WIHC of
-//!   eq. (9) converges. A model that is increasing along every branch may violate these; the
-//!   constrained optimum is then (slightly) worse than the best merely invertible model.
+//!   eq. (9) contracts around reversals (where only the zero-threshold operators move). After
+//!   a jump more operators move and it may still ring when its full loop gain
+//!   (`Mpim::delayed_wihc_loop_gain`, the worst case over every number of moving operators)
+//!   exceeds 1; this fit does not bound that gain, and `hystcomp compensate` reports it. A
+//!   model that is increasing along every branch may violate these; the constrained optimum
+//!   is then (slightly) worse than the best merely invertible model.
 //!
 //! Before solving, the fitted samples' displacement must rise with the voltage (Pearson
 //! correlation at least [`MIN_CORRELATION`]); after, the RMS error must not exceed

@@ -19,7 +19,7 @@ use clarabel::solver::{
 };
 use nalgebra::{DMatrix, DVector};
 
-use crate::problem::dot;
+use crate::problem::{ACTIVE_TOLERANCE, dot};
 use crate::{FitProblem, IdentifyError, Observer, Progress, Solution, Solver};
 
 /// A solution may violate constraints by this fraction of the margin (rounding of the
@@ -72,16 +72,9 @@ impl Solver for LeastSquares {
 
 /// The solution record of a parameter vector.
 pub(crate) fn finish(problem: &FitProblem, theta: Vec<f64>, detail: String) -> Solution {
-    let tolerance = 1e-9 * problem.margin();
-    let active = problem
-        .constraints()
-        .iter()
-        .filter(|c| (dot(&c.coefficients, &theta) - problem.margin()).abs() <= tolerance)
-        .count();
     Solution {
         cost: problem.cost(&theta),
         violation: problem.violation(&theta),
-        active_constraints: active,
         detail,
         theta,
     }
@@ -122,9 +115,9 @@ pub(crate) fn polish_from(problem: &FitProblem, theta: &[f64]) -> Option<Solutio
         .zip(qp.scale.iter())
         .map(|(t, s)| if *s > 0.0 { t / s } else { 0.0 })
         .collect();
-    // Start from the constraints the point violates or nearly meets with equality.
+    // Start from the constraints the point violates or that are active there.
     let active: Vec<usize> = (0..qp.rows.len())
-        .filter(|&j| dot(&qp.rows[j], &z) - qp.margin <= 1e-6)
+        .filter(|&j| dot(&qp.rows[j], &z) - qp.margin <= ACTIVE_TOLERANCE)
         .collect();
     let (z, active) = qp.active_set(active)?;
     Some(finish(

@@ -114,9 +114,14 @@ pub struct FitReport {
     pub condition_number: f64,
     /// Number of linear constraints.
     pub constraints: usize,
-    /// Number of constraints holding with equality at the final parameters (slack at most
-    /// 1e-6 in normalised slope units).
+    /// Number of constraints active at the final parameters: holding with equality within
+    /// [`ACTIVE_TOLERANCE`](crate::problem::ACTIVE_TOLERANCE) (normalised slope units).
     pub active_constraints: usize,
+    /// Number of constraints violated at the final parameters by more than
+    /// [`ACTIVE_TOLERANCE`](crate::problem::ACTIVE_TOLERANCE) (0 for every model the solvers
+    /// return; reports written before this field existed read as 0).
+    #[serde(default)]
+    pub violated_constraints: usize,
     /// The slope margin every constraint demands (normalised).
     pub margin: f64,
     /// The smallest branch slope of the model over its input range (the core's check).

@@ -63,8 +63,6 @@ pub struct Solution {
     pub cost: f64,
     /// Its total constraint violation (0 when every constraint is met).
     pub violation: f64,
-    /// How many constraints hold with equality (to the solver's precision).
-    pub active_constraints: usize,
     /// How the solution was reached, for people (e.g. `unconstrained optimum`).
     pub detail: String,
 }

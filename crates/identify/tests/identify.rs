@@ -6,10 +6,11 @@ mod common;
 use hystcomp_core::{Dihc, Ihc, Mpim, OutputLimits, SolveMode, Wihc};
 use hystcomp_identify::{
     CrossvalOptions, FitProblem, IdentifyError, IdentifyOptions, LeastSquares, Method, NoObserver,
-    OutputOffset, ParticleSwarm, ProblemData, PsoOptions, Record, Solver, Thresholds, Warmup,
-    crossval, identify,
+    OutputOffset, ParticleSwarm, ProblemData, PsoOptions, Record, Solver, Thresholds, Validation,
+    Warmup, crossval, identify, validate_models,
 };
-use hystcomp_io::model_file::Direction;
+use hystcomp_io::compensator::{Method as CompensatorMethod, ScaledCompensator};
+use hystcomp_io::model_file::{Direction, ModelFile, Scale};
 use proptest::prelude::*;
 use proptest::test_runner::{Config, RngSeed};
 use rand::{Rng, RngExt, SeedableRng};
@@ -262,7 +263,8 @@ fn a_record_that_folds_back_gives_a_model_on_the_constraint_boundary() {
     for direction in [Direction::Plant, Direction::Inverse] {
         let p = problem(&x, &y, 10, direction, true);
         let ls = LeastSquares.solve(&p, &mut NoObserver).unwrap();
-        assert!(ls.active_constraints > 0, "{direction}: {}", ls.detail);
+        assert!(p.active_count(&ls.theta) > 0, "{direction}: {}", ls.detail);
+        assert_eq!(p.violated_count(&ls.theta), 0, "{direction}: {}", ls.detail);
         assert!(ls.detail.contains("constrained optimum"), "{}", ls.detail);
         let params = p.parameters(&ls.theta);
         let model: VecMpim =
@@ -589,6 +591,37 @@ fn bad_records_and_options_are_refused_with_a_clear_message() {
     )
     .unwrap_err();
     assert!(matches!(err, IdentifyError::IllConditioned { .. }), "{err}");
+    // A signal that only moves during the warm-up: constant over the fitted samples, said as
+    // such (not as a displacement that "does not rise", correlation NaN).
+    let mut held = x[..100].to_vec();
+    held.extend(std::iter::repeat_n(0.5, 200));
+    let rising: Vec<f64> = (0..300).map(|k| k as f64 / 299.0).collect();
+    let after_warmup = IdentifyOptions {
+        warmup: Warmup::Samples(100),
+        ..options.clone()
+    };
+    for (v, d, quantity) in [
+        (&held, &rising, "the voltage is constant"),
+        (&rising, &held, "the displacement is constant"),
+    ] {
+        let err = identify(v, d, &after_warmup).unwrap_err();
+        let text = err.to_string();
+        assert!(
+            matches!(
+                err,
+                IdentifyError::InvalidOption {
+                    option: "fitting span",
+                    ..
+                }
+            ),
+            "{text}"
+        );
+        assert!(
+            text.contains(quantity) && text.contains("warm-up"),
+            "{text}"
+        );
+        assert!(!text.contains("rise"), "{text}");
+    }
     let fit = identify(
         &wiggle,
         &out,
@@ -606,5 +639,89 @@ fn bad_records_and_options_are_refused_with_a_clear_message() {
         fit.report.fit.rms_percent < 0.1,
         "{}",
         fit.report.fit.rms_percent
+    );
+}
+
+/// The replay counts both kinds of clamped samples: a delayed WIHC whose full loop gain
+/// exceeds 1 (Table 1: 1.66) rings after the jump at the start of a record that does not start
+/// at rest, and those clamps (reachable positions) show as `loop_saturated`, not `saturated`.
+#[test]
+fn replay_counts_the_delayed_loops_clamps_after_a_jump() {
+    let thresholds: Vec<f64> = (0..10).map(|i| i as f64 / 10.0).collect();
+    let weights = [
+        0.2313, 0.3059, 0.0155, 0.0752, 0.0683, 0.0252, 0.0035, 0.0094, 0.0264, 0.0032,
+    ];
+    let table1: VecMpim = Mpim::new(&thresholds, &weights, -0.1569, 0.4603).unwrap();
+    let gain = table1.delayed_wihc_loop_gain(0.0, 1.0).unwrap().gain;
+    assert!(gain > 1.0, "{gain}");
+    let scale = |quantity: &str, unit: &str, scale: f64| Scale {
+        quantity: quantity.to_owned(),
+        unit: unit.to_owned(),
+        offset: 0.0,
+        scale,
+    };
+    let volts = || scale("voltage", "V", 10.0);
+    let um = || scale("displacement", "um", 75.0);
+    let plant =
+        ModelFile::from_model(Direction::Plant, volts(), um(), [0.0, 1.0], &table1).unwrap();
+    let inverse =
+        ModelFile::from_model(Direction::Inverse, um(), volts(), [0.0, 1.0], &table1).unwrap();
+    // 1 Hz at 1 kHz, starting at 5 V: the desired position jumps from rest at the first sample.
+    let voltage: Vec<f64> = (0..2000)
+        .map(|k| 5.0 + 4.0 * (2.0 * std::f64::consts::PI * k as f64 / 1000.0).sin())
+        .collect();
+    let displacement = run(
+        &table1,
+        &voltage.iter().map(|v| v / 10.0).collect::<Vec<_>>(),
+    )
+    .iter()
+    .map(|y| 75.0 * y)
+    .collect::<Vec<_>>();
+    let record = Record {
+        voltage: &voltage,
+        displacement: &displacement,
+    };
+    let report =
+        validate_models(&plant, &inverse, [0.0, 10.0], record, Warmup::Samples(0)).unwrap();
+    for r in &report.replay {
+        // The same counts as a direct replay through the compensator.
+        let method: CompensatorMethod = r.compensator.parse().unwrap();
+        let file = if method == CompensatorMethod::Dihc {
+            &inverse
+        } else {
+            &plant
+        };
+        let mut direct = ScaledCompensator::new(file, method, Some((0.0, 10.0))).unwrap();
+        displacement.iter().for_each(|&y| {
+            direct.step(y);
+        });
+        let d = direct.diagnostics();
+        assert_eq!(
+            (r.saturated, r.loop_saturated),
+            (d.saturated, d.loop_saturated),
+            "{r:?}"
+        );
+        match r.compensator.as_str() {
+            "wihc-delayed" => assert!(r.loop_saturated > 0, "{r:?}"),
+            "ihc" | "wihc" => assert_eq!(r.loop_saturated, 0, "{r:?}"),
+            _ => {}
+        }
+    }
+    // After a warm-up past the ringing, none of it is counted.
+    let settled =
+        validate_models(&plant, &inverse, [0.0, 10.0], record, Warmup::Samples(1000)).unwrap();
+    let wihc_delayed = |v: &Validation| {
+        v.replay
+            .iter()
+            .find(|r| r.compensator == "wihc-delayed")
+            .unwrap()
+            .loop_saturated
+    };
+    assert!(wihc_delayed(&settled) < wihc_delayed(&report));
+    // Its JSON carries both counts.
+    let json = serde_json::to_value(&report).unwrap();
+    assert!(
+        json["replay"][3]["loop_saturated"].as_u64().unwrap() > 0,
+        "{json}"
     );
 }

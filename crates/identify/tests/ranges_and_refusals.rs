@@ -279,7 +279,8 @@ fn err_text(voltage: &[f64], displacement: &[f64], options: &IdentifyOptions) ->
 }
 
 /// A test record with fewer samples after its warm-up than identifying the model needs is
-/// refused with the number needed; one more sample is enough.
+/// refused with the number needed, counted as identification counts the parameters; one more
+/// sample is enough.
 #[test]
 fn crossval_needs_enough_test_samples() {
     let (voltage, displacement) = plant_record(5);
@@ -287,27 +288,30 @@ fn crossval_needs_enough_test_samples() {
         voltage: &voltage,
         displacement: &displacement,
     };
-    let options = CrossvalOptions {
-        test_warmup: Warmup::Samples(0),
-        ..CrossvalOptions::default()
-    };
-    // 10 operators: 13 parameters, 3 samples each.
-    let needed = 39;
-    for (len, ok) in [(2, false), (needed - 1, false), (needed, true)] {
-        let test = Record {
-            voltage: &voltage[..len],
-            displacement: &displacement[..len],
+    // 10 operators with r_1 = 0 (a2 and b_1 are one parameter): a1, a2 + b_1, b_2..b_10 and
+    // the offset c when it is fitted: 12 parameters, 3 samples each; 11 without c.
+    for (offset, needed) in [(OutputOffset::Fit, 36), (OutputOffset::None, 33)] {
+        let mut options = CrossvalOptions {
+            test_warmup: Warmup::Samples(0),
+            ..CrossvalOptions::default()
         };
-        let result = crossval(train, test, &options, &mut NoObserver);
-        match (result, ok) {
-            (Ok(cv), true) => assert_eq!(cv.report.test.forward.samples, needed),
-            (Err(e), false) => {
-                let m = e.to_string();
-                assert!(m.contains(&format!("at least {needed}")), "{m}");
-                assert!(m.contains("test record"), "{m}");
+        options.identify.offset = offset;
+        for (len, ok) in [(2, false), (needed - 1, false), (needed, true)] {
+            let test = Record {
+                voltage: &voltage[..len],
+                displacement: &displacement[..len],
+            };
+            let result = crossval(train, test, &options, &mut NoObserver);
+            match (result, ok) {
+                (Ok(cv), true) => assert_eq!(cv.report.test.forward.samples, needed),
+                (Err(e), false) => {
+                    let m = e.to_string();
+                    assert!(m.contains(&format!("at least {needed}")), "{m}");
+                    assert!(m.contains("test record"), "{m}");
+                }
+                (Ok(_), false) => panic!("{offset:?}: {len} test samples accepted"),
+                (Err(e), true) => panic!("{offset:?}: {len} test samples refused: {e}"),
             }
-            (Ok(_), false) => panic!("{len} test samples accepted"),
-            (Err(e), true) => panic!("{len} test samples refused: {e}"),
         }
     }
 }
