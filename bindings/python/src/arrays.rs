@@ -5,6 +5,7 @@ use std::marker::PhantomData;
 use numpy::{PyArray1, PyReadonlyArray1};
 use pyo3::exceptions::PyTypeError;
 use pyo3::prelude::*;
+use pyo3::types::PyDict;
 
 use crate::errors::invalid;
 
@@ -80,26 +81,45 @@ impl<'a, 'py> FromPyObject<'a, 'py> for ArrayIn<'py> {
                 )));
             }
         }
-        let floats = array.call_method1("astype", ("float64",)).map_err(|e| {
-            PyTypeError::new_err(format!(
-                "expected a 1-D array of floats, but these values are not all numbers: {e}"
-            ))
-        })?;
+        // A native float64 array (asarray kept it as given) is read in place: `copy=False`
+        // converts only when the dtype or byte order differs, so the values are copied once,
+        // into the Vec below.
+        let kwargs = PyDict::new(py);
+        kwargs.set_item("copy", false)?;
+        let floats = array
+            .call_method("astype", ("float64",), Some(&kwargs))
+            .map_err(|e| {
+                PyTypeError::new_err(format!(
+                    "expected a 1-D array of floats, but these values are not all numbers: {e}"
+                ))
+            })?;
         let readonly: PyReadonlyArray1<'py, f64> = floats.extract()?;
+        let values = match readonly.as_slice() {
+            Ok(contiguous) => contiguous.to_vec(),
+            // A strided view (a[::2]): gathered element by element, still one copy.
+            Err(_) => readonly.as_array().iter().copied().collect(),
+        };
         Ok(ArrayIn {
-            values: readonly.as_array().iter().copied().collect(),
+            values,
             _py: PhantomData,
         })
     }
 }
 
-/// The values of `array`.
-pub fn values(array: &ArrayIn<'_>) -> Vec<f64> {
-    array.values.clone()
+impl ArrayIn<'_> {
+    /// The values, moved out (no copy).
+    pub fn into_values(self) -> Vec<f64> {
+        self.values
+    }
+}
+
+/// The values of `array`, moved out (no copy).
+pub fn values(array: ArrayIn<'_>) -> Vec<f64> {
+    array.into_values()
 }
 
 /// The values of `array`, refused when one is NaN or infinite (naming the first).
-pub fn finite_values(array: &ArrayIn<'_>, name: &str) -> PyResult<Vec<f64>> {
+pub fn finite_values(array: ArrayIn<'_>, name: &str) -> PyResult<Vec<f64>> {
     let v = values(array);
     check_finite(&v, name)?;
     Ok(v)

@@ -135,7 +135,7 @@ impl Compensator {
         py: Python<'py>,
         y_d: ArrayIn<'py>,
     ) -> PyResult<Bound<'py, PyArray1<f64>>> {
-        let desired = finite_values(&y_d, "y_d")?;
+        let desired = finite_values(y_d, "y_d")?;
         // The lock is taken and released without the GIL, so that a thread waiting for the
         // GIL can never hold up one waiting for the lock.
         let control = py.detach(|| {

@@ -155,7 +155,7 @@ pub fn identify(
         direction: parse_direction(direction)?,
         method,
         thresholds: match thresholds {
-            Some(t) => Thresholds::Given(values(&t)),
+            Some(t) => Thresholds::Given(values(t)),
             None => Thresholds::Uniform(n),
         },
         warmup,
@@ -171,8 +171,8 @@ pub fn identify(
         displacement_unit: displacement_unit.to_string(),
         ..IdentifyOptions::default()
     };
-    let voltage = values(&voltage);
-    let displacement = values(&displacement);
+    let voltage = values(voltage);
+    let displacement = values(displacement);
     let result = py.detach(|| hystcomp_identify::identify(&voltage, &displacement, &options));
     Ok(Identification {
         inner: result.map_err(errors::identify)?,

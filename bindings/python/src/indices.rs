@@ -79,13 +79,13 @@ pub fn indices_dict<'py>(py: Python<'py>, i: &RustIndices) -> PyResult<Bound<'py
 /// or infinite samples, or a constant desired trajectory.
 #[pyfunction]
 pub fn e_m(desired: ArrayIn<'_>, measured: ArrayIn<'_>) -> PyResult<f64> {
-    e_m_percent(&values(&desired), &values(&measured)).map_err(errors::index)
+    e_m_percent(&values(desired), &values(measured)).map_err(errors::index)
 }
 
 /// (D2): ``sqrt(mean (y - y_d)^2) / (max y_d - min y_d) * 100`` (percent).
 #[pyfunction]
 pub fn e_rms(desired: ArrayIn<'_>, measured: ArrayIn<'_>) -> PyResult<f64> {
-    e_rms_percent(&values(&desired), &values(&measured)).map_err(errors::index)
+    e_rms_percent(&values(desired), &values(measured)).map_err(errors::index)
 }
 
 /// Eq. (12): the largest ``max y - min y`` within one of ``bins`` equal bins of the ``y_d``
@@ -93,7 +93,7 @@ pub fn e_rms(desired: ArrayIn<'_>, measured: ArrayIn<'_>) -> PyResult<f64> {
 #[pyfunction]
 #[pyo3(signature = (desired, measured, bins = DEFAULT_MHE_BINS))]
 pub fn e_mhe(desired: ArrayIn<'_>, measured: ArrayIn<'_>, bins: usize) -> PyResult<f64> {
-    e_mhe_percent(&values(&desired), &values(&measured), bins).map_err(errors::index)
+    e_mhe_percent(&values(desired), &values(measured), bins).map_err(errors::index)
 }
 
 /// All three indices of ``measured`` (``y``) against ``desired`` (``y_d``).
@@ -104,7 +104,7 @@ pub fn tracking_indices(
     measured: ArrayIn<'_>,
     bins: usize,
 ) -> PyResult<TrackingIndices> {
-    RustIndices::compute(&values(&desired), &values(&measured), bins)
+    RustIndices::compute(&values(desired), &values(measured), bins)
         .map(|inner| TrackingIndices { inner })
         .map_err(errors::index)
 }

@@ -45,8 +45,8 @@ impl Mpim {
     #[new]
     #[pyo3(signature = (thresholds, weights, a1, a2))]
     fn new(thresholds: ArrayIn<'_>, weights: ArrayIn<'_>, a1: f64, a2: f64) -> PyResult<Self> {
-        let thresholds = crate::arrays::values(&thresholds);
-        let weights = crate::arrays::values(&weights);
+        let thresholds = crate::arrays::values(thresholds);
+        let weights = crate::arrays::values(weights);
         let inner = CoreMpim::new(&thresholds, &weights, a1, a2).map_err(errors::core)?;
         Ok(Mpim { inner })
     }
@@ -101,7 +101,7 @@ impl Mpim {
 
     /// Sets the operators' memory (one finite value per operator).
     fn set_memory(&mut self, memory: ArrayIn<'_>) -> PyResult<()> {
-        let memory = crate::arrays::values(&memory);
+        let memory = crate::arrays::values(memory);
         self.inner.set_memory(&memory).map_err(errors::core)
     }
 
@@ -126,7 +126,7 @@ impl Mpim {
         py: Python<'py>,
         x: ArrayIn<'py>,
     ) -> PyResult<Bound<'py, PyArray1<f64>>> {
-        let x = finite_values(&x, "x")?;
+        let x = finite_values(x, "x")?;
         let mut y = vec![0.0; x.len()];
         self.inner.process(&x, &mut y).map_err(errors::core)?;
         Ok(array_out(py, y))
@@ -300,8 +300,8 @@ impl ModelFile {
             input.map_or_else(|| normalised_scale("normalised input"), |s| s.inner),
             output.map_or_else(|| normalised_scale("normalised output"), |s| s.inner),
             [input_range.0, input_range.1],
-            crate::arrays::values(&thresholds),
-            crate::arrays::values(&weights),
+            crate::arrays::values(thresholds),
+            crate::arrays::values(weights),
             a1,
             a2,
         )
@@ -351,7 +351,7 @@ impl ModelFile {
         py: Python<'py>,
         inputs: ArrayIn<'py>,
     ) -> PyResult<Bound<'py, PyArray1<f64>>> {
-        let inputs = finite_values(&inputs, "inputs")?;
+        let inputs = finite_values(inputs, "inputs")?;
         let outputs = self.inner.predict(&inputs).map_err(errors::model_file)?;
         Ok(array_out(py, outputs))
     }

@@ -71,7 +71,7 @@ impl Stage {
     /// A whole command signal (V, one value per sample) from the current state. Releases the
     /// GIL while it runs.
     fn run(&mut self, py: Python<'_>, command_v: ArrayIn<'_>) -> PyResult<StageResponse> {
-        let command = finite_values(&command_v, "command_v")?;
+        let command = finite_values(command_v, "command_v")?;
         let stage = &mut self.inner;
         let response = py.detach(|| stage.run(&command));
         Ok(StageResponse {
