@@ -66,3 +66,19 @@ def test_every_public_member_of_the_extension_has_a_docstring():
             if not (getattr(value, "__doc__", None) or "").strip():
                 missing.append(f"{name}.{member}")
     assert not missing, f"no docstring: {missing}"
+
+
+def test_every_public_function_of_the_extension_and_package_has_a_docstring():
+    functions = {}
+    for module in (_hystcomp, hystcomp):
+        for name in dir(module):
+            obj = getattr(module, name)
+            if name.startswith("_") or inspect.isclass(obj) or not callable(obj):
+                continue
+            functions[f"{module.__name__}.{name}"] = obj
+    # The walk found the module-level functions (so this test checks something).
+    for expected in ("identify", "e_m", "e_rms", "e_mhe", "tracking_indices", "reproduce", "paper_trajectory"):
+        assert f"{_hystcomp.__name__}.{expected}" in functions, expected
+        assert f"hystcomp.{expected}" in functions, expected
+    missing = [name for name, obj in functions.items() if not (obj.__doc__ or "").strip()]
+    assert not missing, f"no docstring: {missing}"
