@@ -209,38 +209,6 @@ max_v = 3.0
 }
 
 #[test]
-fn a_gain_that_never_reaches_the_rail_is_refused_with_both_fields_and_the_file() {
-    let dir = tempfile::tempdir().unwrap();
-    let input = dir.path().join("volts.csv");
-    let stage = dir.path().join("weak.toml");
-    write_input(&input, 1e4, 100);
-    std::fs::write(
-        &stage,
-        "[amplifier]
-gain = 5.0
-",
-    )
-    .unwrap();
-    assert_fails(
-        &[
-            "simulate",
-            "--stage",
-            s(&stage),
-            "--input",
-            s(&input),
-            "-o",
-            s(&dir.path().join("out.csv")),
-        ],
-        &[
-            "weak.toml",
-            "amplifier.gain",
-            "amplifier.output_max_v",
-            "dac.max_v",
-        ],
-    );
-}
-
-#[test]
 fn bad_stage_file_is_refused_with_the_field_named() {
     let dir = tempfile::tempdir().unwrap();
     let input = dir.path().join("volts.csv");

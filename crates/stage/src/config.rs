@@ -398,10 +398,12 @@ impl StageConfig {
         toml::to_string(self).expect("a stage configuration always serialises to TOML")
     }
 
-    /// The command that drives the amplifier to its upper rail, V: `output_max_v / gain`
-    /// (10 V for the built-in stage).
+    /// The largest useful command, V: the one that drives the amplifier to its upper rail,
+    /// `output_max_v / gain` (10 V for the built-in stage), or the DAC's top `dac.max_v` when
+    /// the amplifier's gain cannot reach the rail from it (a 10 V DAC into a x10 amplifier with
+    /// 150 V rails tops out at 100 V).
     pub fn full_scale_command_v(&self) -> f64 {
-        self.amplifier.output_max_v / self.amplifier.gain
+        (self.amplifier.output_max_v / self.amplifier.gain).min(self.dac.max_v)
     }
 
     /// Checks every value; the error names the first offending field.
@@ -427,26 +429,6 @@ impl StageConfig {
         positive("amplifier.bandwidth_hz", a.bandwidth_hz)?;
         positive("amplifier.peak_current_ma", a.peak_current_ma)?;
         positive("amplifier.load_capacitance_uf", a.load_capacitance_uf)?;
-        // The full-scale command (`output_max_v / gain`) must be one the DAC can write:
-        // otherwise the upper rail, and the stroke the study and the compensators assume, is
-        // never reached.
-        if self.dac.max_v * a.gain < a.output_max_v * (1.0 - 1e-9) {
-            return Err(StageError::invalid(
-                "amplifier.gain",
-                format!(
-                    "at least amplifier.output_max_v / dac.max_v = {} / {} = {} so that the \
-                     DAC's full command reaches the amplifier's upper rail (dac.max_v * gain = \
-                     {} V < {} V); raise amplifier.gain or dac.max_v, or lower \
-                     amplifier.output_max_v",
-                    a.output_max_v,
-                    self.dac.max_v,
-                    a.output_max_v / self.dac.max_v,
-                    self.dac.max_v * a.gain,
-                    a.output_max_v
-                ),
-                a.gain,
-            ));
-        }
 
         self.hysteresis.preisach.validate()?;
         self.hysteresis.bouc_wen.validate()?;

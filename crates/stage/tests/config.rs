@@ -90,17 +90,6 @@ const BAD_FILES: &[(&str, &str, &str)] = &[
         "> 0",
     ),
     ("[amplifier]\ngain = 0.0", "amplifier.gain", "> 0"),
-    // The DAC's full command (10 V) times the gain (5) gives 50 V: never the 150 V rail.
-    (
-        "[amplifier]\ngain = 5.0",
-        "amplifier.gain",
-        "so that the DAC's full command reaches the amplifier's upper rail (dac.max_v * gain = 50 V < 150 V)",
-    ),
-    (
-        "[dac]\nmax_v = 5.0",
-        "amplifier.gain",
-        "amplifier.output_max_v / dac.max_v = 150 / 5 = 30",
-    ),
     (
         "[amplifier]\noutput_min_v = 150.0\noutput_max_v = 0.0",
         "amplifier.output_min_v..amplifier.output_max_v",
@@ -260,4 +249,31 @@ fn missing_file_is_an_io_error_naming_the_path() {
     let error = StageConfig::from_toml_file(path).unwrap_err();
     assert!(matches!(error, StageError::Io { .. }));
     assert!(error.to_string().contains("/nonexistent/dir/stage.toml"));
+}
+
+/// The full-scale command drives the amplifier to its upper rail when the DAC can write it,
+/// and is the DAC's top otherwise (a low-gain amplifier); such a stage is valid, and at full
+/// command it reaches a stroke below the rail's in proportion.
+#[test]
+fn full_scale_command_is_the_rail_or_the_dac_top_whichever_comes_first() {
+    let default = StageConfig::default();
+    assert_eq!(
+        default.full_scale_command_v(),
+        default.amplifier.output_max_v / default.amplifier.gain
+    );
+    for gain in [2.0, 5.0, 10.0, 15.0, 30.0] {
+        let mut config = default.clone();
+        config.amplifier.gain = gain;
+        config.validate().unwrap();
+        let top = config.full_scale_command_v();
+        assert!(top <= config.dac.max_v && top * gain <= config.amplifier.output_max_v + 1e-9);
+        // One of the two bounds is met with equality.
+        let at_rail = (top * gain - config.amplifier.output_max_v).abs() < 1e-9;
+        assert!(at_rail || top == config.dac.max_v, "gain {gain}: {top} V");
+    }
+    let mut weak = default.clone();
+    weak.amplifier.gain = 5.0;
+    let stroke = hystcomp_stage::quasi_static_stroke_um(&weak).unwrap();
+    let full = hystcomp_stage::quasi_static_stroke_um(&default).unwrap();
+    assert!(stroke < 0.6 * full, "{stroke} um of {full} um");
 }
