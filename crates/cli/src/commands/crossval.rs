@@ -3,13 +3,13 @@
 
 use std::path::PathBuf;
 
-use hystcomp_identify::{CrossvalOptions, Record, Warmup, crossval};
+use hystcomp_identify::{CrossvalOptions, IdentifyError, Record, Warmup, crossval};
 use hystcomp_io::data::{Column, RowRange};
 use hystcomp_io::model_file::Direction;
 use serde::Serialize;
 
 use super::identify::{
-    CONSTRAINTS_HELP, ColumnArgs, FitArgs, check_distinct_paths, load, print_fit,
+    CONSTRAINTS_HELP, ColumnArgs, FitArgs, check_distinct_paths, fit_error, load, print_fit,
 };
 use crate::progress::Bar;
 use crate::{CliError, Context};
@@ -149,12 +149,14 @@ pub fn run(args: &Args, ctx: Context) -> Result<(), CliError> {
         &options,
         &mut bar,
     )
-    .map_err(|e| {
-        CliError::from(e).context(format!(
+    .map_err(|e| match e {
+        // Only the identification on the training record looks for it.
+        IdentifyError::SameSignal => fit_error(e, &args.train, &train),
+        e => CliError::from(e).context(format!(
             "{} (train) / {} (test)",
             args.train.display(),
             args.test.display()
-        ))
+        )),
     })?;
     bar.finish();
     for (path, model) in [
@@ -215,14 +217,14 @@ pub fn run(args: &Args, ctx: Context) -> Result<(), CliError> {
         t.voltage_limits[0], t.voltage_limits[1], c.voltage_unit
     );
     println!(
-        "    {:14} {:>9} {:>9} {:>12} {:>10}",
-        "compensator", "RMS %", "max %", "mean", "saturated"
+        "    {:14} {:>9} {:>9} {:>12} {:>10} {:>10}",
+        "compensator", "RMS %", "max %", "mean", "saturated", "loop-sat."
     );
     for r in &t.replay {
         match (&r.error, &r.failure) {
             (Some(e), _) => println!(
-                "    {:14} {:>9.3} {:>9.3} {:>12.5} {:>10}",
-                r.compensator, e.rms_percent, e.max_percent, e.mean, r.saturated
+                "    {:14} {:>9.3} {:>9.3} {:>12.5} {:>10} {:>10}",
+                r.compensator, e.rms_percent, e.max_percent, e.mean, r.saturated, r.loop_saturated
             ),
             (None, failure) => println!(
                 "    {:14} not built: {}",
@@ -230,6 +232,13 @@ pub fn run(args: &Args, ctx: Context) -> Result<(), CliError> {
                 failure.as_deref().unwrap_or("unknown reason")
             ),
         }
+    }
+    if t.replay.iter().any(|r| r.loop_saturated > 0) {
+        println!(
+            "  loop-sat.: samples clamped to a limit although the displacement was reachable: \
+             the one-sample-delayed loop lagged or rang after a jump (the exact ihc and wihc \
+             do not)"
+        );
     }
     Ok(())
 }

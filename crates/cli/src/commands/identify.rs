@@ -3,8 +3,8 @@
 use std::path::{Path, PathBuf};
 
 use hystcomp_identify::{
-    IdentifyOptions, Method, OutputOffset, PsoBounds, PsoOptions, Thresholds, Warmup,
-    identify_observed,
+    IdentifyError, IdentifyOptions, Method, OutputOffset, PsoBounds, PsoOptions, Thresholds,
+    Warmup, identify_observed,
 };
 use hystcomp_io::data::{self, Column, Delimiter, Header, ReadOptions, RowRange};
 use hystcomp_io::model_file::Direction;
@@ -165,8 +165,9 @@ Constraints of the fit (both solvers): the model is strictly increasing along ev
 (every branch slope >= --margin over the fitted input range), so that it is invertible. A plant \
 model must meet two more, beyond the paper: the play-operator part a2 + b_1 + ... + b_k >= \
 margin for every k, so that the analytic inverse of eq. (7) exists (IHC), and |3 a1 x^2 + b_1| \
-< a2 with margin over the range, so that the one-sample-delayed WIHC of eq. (9) converges. \
-Fits are refused when the displacement does not rise with the voltage (correlation below 0.5), \
+< a2 with margin over the range, so that the one-sample-delayed WIHC of eq. (9) contracts around \
+reversals; after a jump it may still ring when its full loop gain (every number of moving \
+operators) exceeds 1, which `hystcomp compensate` reports. Fits are refused when the displacement does not rise with the voltage (correlation below 0.5), \
 or when the RMS error exceeds 10 % of the output range (unless --accept-poor-fit).";
 
 /// Arguments of `hystcomp identify`.
@@ -283,15 +284,6 @@ pub fn load(
     };
     let read = data::read_columns(path, &selection, &options)?;
     let names = read.names.clone();
-    if read.values[0] == read.values[1] {
-        return Err(CliError::input(format!(
-            "{}: the voltage column ({}) and the displacement column ({}) hold the same \
-             values: give two different columns (--voltage-column, --displacement-column)",
-            path.display(),
-            names[0],
-            names[1]
-        )));
-    }
     for (what, column, factor) in [
         ("--voltage-factor", &read.values[0], columns.voltage_factor),
         (
@@ -511,16 +503,42 @@ pub fn print_fit(report: &hystcomp_identify::FitReport) {
         );
     }
     println!(
-        "  solver: {} ({}), {} of {} constraints active, smallest branch slope {:.4} \
+        "  solver: {} ({}), {} of {} constraints active{}, smallest branch slope {:.4} \
          (margin {}), {:.1} ms",
         report.solver,
         report.detail,
         report.active_constraints,
         report.constraints,
+        match report.violated_constraints {
+            0 => String::new(),
+            v => format!(" and {v} violated"),
+        },
         report.min_branch_slope,
         report.margin,
         report.elapsed_s * 1e3
     );
+}
+
+/// A library error of a fit on `loaded` (read from `path`) for the user: the file's name, and
+/// for [`IdentifyError::SameSignal`] the two columns given.
+pub fn fit_error(error: IdentifyError, path: &Path, loaded: &Loaded) -> CliError {
+    let column = |name: &String| {
+        if name.starts_with("column ") {
+            name.clone()
+        } else {
+            format!("column \"{name}\"")
+        }
+    };
+    let context = match (&error, loaded.names.as_slice()) {
+        (IdentifyError::SameSignal, [voltage, displacement, ..]) => format!(
+            "{} (voltage {}, displacement {})",
+            path.display(),
+            column(voltage),
+            column(displacement)
+        ),
+        _ => path.display().to_string(),
+    };
+    CliError::from(error).context(context)
 }
 
 /// The path as the file system resolves it: canonical when the file exists, else its
@@ -588,7 +606,7 @@ pub fn run(args: &Args, ctx: Context) -> Result<(), CliError> {
         Bar::hidden()
     };
     let fit = identify_observed(&loaded.voltage, &loaded.displacement, &options, &mut bar)
-        .map_err(|e| CliError::from(e).context(args.data.display()))?;
+        .map_err(|e| fit_error(e, &args.data, &loaded))?;
     bar.finish();
     let mut model = fit.model.clone();
     if let Some(serde_json::Value::Object(map)) = &mut model.identification {
