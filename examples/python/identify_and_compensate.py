@@ -68,14 +68,16 @@ def main(argv):
 
     print(f"\n1 Hz sine, {desired_um.min():.1f} to {desired_um.max():.1f} um, through the "
           f"identified plant model (last of 5 cycles)")
-    print("(e_mhe of a single-valued map is about 1 % here: the slope of the map within one of "
-          f"the {hystcomp.DEFAULT_MHE_BINS} bins)")
-    print(f"{'command':12s} {'volts':>14s} {'e_mhe %':>8s} {'e_m %':>8s} {'e_rms %':>8s}")
     last_cycle = slice(-int(SAMPLE_RATE_HZ), None)
+    # e_mhe needs about 10 samples per bin: one cycle at this rate supports this many bins.
+    bins = int(SAMPLE_RATE_HZ) // 10
+    print(f"(e_mhe over {bins} bins: that of a single-valued map is about {100 / bins:.0f} % "
+          "here, the slope of the map within one bin)")
+    print(f"{'command':12s} {'volts':>14s} {'e_mhe %':>8s} {'e_m %':>8s} {'e_rms %':>8s}")
     results = {}
     for name, command in commands.items():
         reached_um = plant.model.predict(command)
-        indices = hystcomp.tracking_indices(desired_um[last_cycle], reached_um[last_cycle])
+        indices = hystcomp.tracking_indices(desired_um[last_cycle], reached_um[last_cycle], bins)
         results[name] = indices
         print(f"{name:12s} {command.min():6.3f}..{command.max():6.3f} {indices.e_mhe:8.3f} "
               f"{indices.e_m:8.3f} {indices.e_rms:8.3f}")
