@@ -89,14 +89,17 @@ pub fn e_rms(desired: ArrayIn<'_>, measured: ArrayIn<'_>) -> PyResult<f64> {
 }
 
 /// Eq. (12): the largest ``max y - min y`` within one of ``bins`` equal bins of the ``y_d``
-/// range, divided by ``max y_d - min y_d``, times 100 (percent).
+/// range, divided by ``max y_d - min y_d``, times 100 (percent). Needs at least 10 samples per
+/// bin on average (``bins <= max(1, len(desired) // 10)``): with fewer, bins hold one sample or
+/// none and e_mhe reads low; otherwise raises with the largest ``bins`` the record supports.
 #[pyfunction]
 #[pyo3(signature = (desired, measured, bins = DEFAULT_MHE_BINS))]
 pub fn e_mhe(desired: ArrayIn<'_>, measured: ArrayIn<'_>, bins: usize) -> PyResult<f64> {
     e_mhe_percent(&values(desired), &values(measured), bins).map_err(errors::index)
 }
 
-/// All three indices of ``measured`` (``y``) against ``desired`` (``y_d``).
+/// All three indices of ``measured`` (``y``) against ``desired`` (``y_d``); ``bins`` as for
+/// :func:`e_mhe` (at least 10 samples per bin on average).
 #[pyfunction]
 #[pyo3(signature = (desired, measured, bins = DEFAULT_MHE_BINS))]
 pub fn tracking_indices(

@@ -128,7 +128,8 @@ impl Stage {
         clamps_dict(py, self.inner.clamps())
     }
 
-    /// The full-scale command, V (the DAC's upper end that the amplifier maps to its top).
+    /// The full-scale command, V: the one that drives the amplifier to its upper rail, or the
+    /// DAC's top when the amplifier's gain cannot reach the rail from it.
     #[getter]
     fn full_scale_command_v(&self) -> f64 {
         self.inner.config().full_scale_command_v()

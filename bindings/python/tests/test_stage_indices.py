@@ -135,3 +135,13 @@ def test_paper_trajectory_is_the_section_4_3_multisine():
     np.testing.assert_allclose(y_d, expected, atol=1e-9)
     with pytest.raises(hystcomp.InvalidValueError):
         hystcomp.paper_trajectory(duration_s=-1.0)
+
+
+def test_e_mhe_refuses_more_bins_than_the_record_supports():
+    desired = np.linspace(0.0, 1.0, 100)
+    # A single-valued map: e_mhe is the slope within one bin, at most a tenth of the range.
+    assert 0.0 < hystcomp.e_mhe(desired, desired, 10) <= 10.0
+    with pytest.raises(hystcomp.InvalidValueError, match="use at most 10 bins"):
+        hystcomp.e_mhe(desired, desired, 11)
+    with pytest.raises(hystcomp.InvalidValueError, match="use at most 10 bins"):
+        hystcomp.tracking_indices(desired, desired)

@@ -275,7 +275,7 @@ fn evaluate_computes_the_three_indices_and_refuses_bad_records() {
             "--measured",
             s(&mat),
         ],
-        "no --measured-column given, and no variable measured_position_um",
+        "no --measured-column given, and no variable measured_position_um to take by default",
     );
     let o = hystcomp(&[
         "evaluate",

@@ -464,13 +464,20 @@ pub fn run_study(
     let stroke_um = quasi_static_stroke_um(&options.stage)?;
     let desired_max = desired.iter().copied().fold(f64::NEG_INFINITY, f64::max);
     if stroke_um.is_nan() || stroke_um < desired_max {
+        let amplifier = &options.stage.amplifier;
+        let amplifier_top = full_scale * amplifier.gain;
+        // Below the rail, the DAC's top and the gain limit the voltage, not the rail.
+        let more_voltage = if amplifier_top < amplifier.output_max_v * (1.0 - 1e-9) {
+            "amplifier.gain or dac.max_v: the DAC's top does not reach amplifier.output_max_v"
+        } else {
+            "amplifier.output_max_v"
+        };
         return Err(StudyError::Option(format!(
             "the stage cannot reach the trajectory: its quasi-static stroke at full command \
-             ({full_scale:.3} V, {:.1} V at the amplifier) is {stroke_um:.2} um, below the \
-             trajectory's maximum of {desired_max:.2} um; give the stage more stroke (e.g. \
-             hysteresis.preisach.stroke_um or hysteresis.bouc_wen.d_p_um_per_v) or more \
-             voltage (amplifier.output_max_v)",
-            options.stage.amplifier.output_max_v
+             ({full_scale:.3} V, {amplifier_top:.1} V at the amplifier) is {stroke_um:.2} um, \
+             below the trajectory's maximum of {desired_max:.2} um; give the stage more stroke \
+             (e.g. hysteresis.preisach.stroke_um or hysteresis.bouc_wen.d_p_um_per_v) or more \
+             voltage ({more_voltage})"
         )));
     }
     let sensor_span_um = options.stage.adc.max_v / options.stage.sensor.sensitivity_v_per_um;

@@ -578,13 +578,16 @@ pub fn explanations(study: &Study) -> Vec<TextSection> {
         paragraphs.push(format!(
             "Informational checks: the paper pipeline is held to the exact pipeline's bounds \
              for information only (marked in the table, not counted in the acceptance), and \
-             misses {}: {}. For comparison, the paper reports e_mhe {} / {} / {} % for IHC / \
-             WIHC / DIHC on hardware.",
+             misses {}: {}. For comparison, the paper reports e_mhe {} / {} / {} % and e_rms \
+             {} / {} / {} % for IHC / WIHC / DIHC on hardware.",
             if misses.len() == 1 { "one" } else { "some" },
             misses.join("; "),
             t3.ihc.e_mhe,
             t3.wihc.e_mhe,
             t3.dihc.e_mhe,
+            t3.ihc.e_rms,
+            t3.wihc.e_rms,
+            t3.dihc.e_rms,
         ));
     }
     sections.push(TextSection {

@@ -294,7 +294,15 @@ fn bad_options_are_refused_with_the_reason() {
     );
     let mut options = StudyOptions::default();
     options.stage.hysteresis.preisach.stroke_um = 30.0;
-    assert!(err(options).contains("cannot reach the trajectory"));
+    let message = err(options);
+    assert!(message.contains("cannot reach the trajectory"), "{message}");
+    assert!(message.contains("150.0 V at the amplifier"), "{message}");
+    // A x5 amplifier from a 10 V DAC tops out at 50 V: the gain or the DAC is what to change.
+    let mut options = StudyOptions::default();
+    options.stage.amplifier.gain = 5.0;
+    let message = err(options);
+    assert!(message.contains("50.0 V at the amplifier"), "{message}");
+    assert!(message.contains("amplifier.gain or dac.max_v"), "{message}");
     let mut options = StudyOptions::default();
     options.stage.sensor.sensitivity_v_per_um = 0.2;
     assert!(err(options).contains("sensor.sensitivity_v_per_um = 10 / 0.2"));

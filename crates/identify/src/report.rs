@@ -118,8 +118,10 @@ pub struct FitReport {
     /// [`ACTIVE_TOLERANCE`](crate::problem::ACTIVE_TOLERANCE) (normalised slope units).
     pub active_constraints: usize,
     /// Number of constraints violated at the final parameters by more than
-    /// [`ACTIVE_TOLERANCE`](crate::problem::ACTIVE_TOLERANCE) (0 for every model the solvers
-    /// return; reports written before this field existed read as 0).
+    /// [`ACTIVE_TOLERANCE`](crate::problem::ACTIVE_TOLERANCE): 0 whenever the solver's answer
+    /// is feasible to that tolerance, as the least-squares optimum is (a swarm's best particle
+    /// may leave some violated; the model is still checked invertible before it is returned).
+    /// Reports written before this field existed read as 0.
     #[serde(default)]
     pub violated_constraints: usize,
     /// The slope margin every constraint demands (normalised).

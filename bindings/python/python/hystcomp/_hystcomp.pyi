@@ -288,9 +288,12 @@ def e_m(desired: ArrayLike, measured: ArrayLike) -> float:
 def e_rms(desired: ArrayLike, measured: ArrayLike) -> float:
     """Root-mean-square tracking error (D2), percent of the desired range."""
 def e_mhe(desired: ArrayLike, measured: ArrayLike, bins: int = 100) -> float:
-    """Maximum hysteresis error, eq. (12), over ``bins`` bins, percent of the desired range."""
+    """Maximum hysteresis error, eq. (12), over ``bins`` bins, percent of the desired range.
+
+    Needs at least 10 samples per bin on average (``bins <= max(1, len(desired) // 10)``);
+    raises otherwise, naming the largest ``bins`` the record supports."""
 def tracking_indices(desired: ArrayLike, measured: ArrayLike, bins: int = 100) -> TrackingIndices:
-    """e_mhe, e_m and e_rms together."""
+    """e_mhe, e_m and e_rms together; ``bins`` as for :func:`e_mhe`."""
 
 class StudyResult:
     """The paper's Table 3 measured on the simulated stage."""

@@ -128,7 +128,8 @@ pub fn run(args: &Args, ctx: Context) -> Result<(), CliError> {
                 }
                 Err(error @ DataError::NoSuchVariable { .. }) => {
                     return Err(CliError::from(error).context(format!(
-                        "no --measured-column given, and no variable {SIMULATE_MEASURED} to                          take by default"
+                        "no --measured-column given, and no variable {SIMULATE_MEASURED} to \
+                         take by default"
                     )));
                 }
                 other => other?,
