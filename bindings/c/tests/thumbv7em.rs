@@ -1,8 +1,8 @@
 //! The core's compensators on a microcontroller: `examples/thumbv7em`, a `no_std`, `no_main`
 //! program that builds IHC, WIHC and DIHC in `f32` with fixed arrays and no allocator, is built
 //! for a Cortex-M4F (`thumbv7em-none-eabihf`) and its image inspected: no allocator linked, the
-//! step functions present, the code small, and the RAM per compensator equal to the table in
-//! `docs/microcontroller.md` (on the target and on this host).
+//! step functions present and unable to reach a panic, the code small, and the RAM per
+//! compensator equal to the table in `docs/microcontroller.md` (on the target and on this host).
 //!
 //! Without the target (and no way to add it with rustup) the test says so and builds the core
 //! without default features on the host instead.
@@ -164,6 +164,22 @@ fn compensators_build_for_a_cortex_m4f_without_an_allocator() {
         eprintln!("{step}: {} bytes", symbol.size());
     }
 
+    // The per-sample path cannot panic: no function a step function can reach by a call or a
+    // branch is one of core's panic entry points (bounds checks, slice indexing, panic!).
+    for step in [
+        "hystcomp_ihc_step",
+        "hystcomp_wihc_step",
+        "hystcomp_dihc_step",
+    ] {
+        let reached = reachable_functions(&elf, step);
+        assert!(reached.len() > 1, "{step} reaches nothing: {reached:?}");
+        let panics: Vec<&String> = reached.iter().filter(|n| n.contains("panic")).collect();
+        assert!(
+            panics.is_empty(),
+            "{step} can reach a panic: {panics:?} (of {reached:?})"
+        );
+    }
+
     let text = elf
         .section_by_name(".text")
         .expect("a .text section")
@@ -202,4 +218,95 @@ fn compensators_build_for_a_cortex_m4f_without_an_allocator() {
             if i < 4 { 10 } else { 100 }
         );
     }
+}
+
+/// The functions (by symbol name) reachable from `start` through Thumb-2 `BL`, `B.W` and
+/// 16-bit `B` instructions whose targets lie in another function (calls and tail calls),
+/// `start` included. Literal pools (between the `$d` and `$t` mapping symbols) are skipped.
+fn reachable_functions(elf: &object::File<'_>, start: &str) -> Vec<String> {
+    let text = elf.section_by_name(".text").expect("a .text section");
+    let base = text.address();
+    let code = text.data().expect("the .text bytes");
+    let mut functions: Vec<(u64, u64, String)> = Vec::new();
+    let mut data_marks: Vec<(u64, bool)> = Vec::new(); // (address, is data)
+    for symbol in elf.symbols() {
+        let Ok(name) = symbol.name() else { continue };
+        let address = symbol.address() & !1;
+        match name {
+            "$d" => data_marks.push((address, true)),
+            "$t" => data_marks.push((address, false)),
+            _ if symbol.kind() == object::SymbolKind::Text && symbol.size() > 0 => {
+                functions.push((address, symbol.size(), name.to_owned()))
+            }
+            _ => {}
+        }
+    }
+    data_marks.sort_unstable();
+    let in_data = |address: u64| {
+        data_marks
+            .iter()
+            .rev()
+            .find(|(at, _)| *at <= address)
+            .is_some_and(|(_, data)| *data)
+    };
+    let function_at = |address: u64| {
+        functions
+            .iter()
+            .find(|(at, size, _)| (*at..*at + *size).contains(&address))
+    };
+    let halfword = |address: u64| -> Option<u16> {
+        let k = usize::try_from(address.checked_sub(base)?).ok()?;
+        Some(u16::from_le_bytes([*code.get(k)?, *code.get(k + 1)?]))
+    };
+    let (first, size, _) = functions
+        .iter()
+        .find(|(_, _, n)| n == start)
+        .unwrap_or_else(|| panic!("{start} is missing from the image"))
+        .clone();
+    let mut seen = vec![start.to_owned()];
+    let mut queue = vec![(first, size)];
+    while let Some((at, size)) = queue.pop() {
+        let mut pc = at;
+        while pc < at + size {
+            let Some(h1) = halfword(pc) else { break };
+            if in_data(pc) {
+                pc += 2;
+                continue;
+            }
+            let wide = (h1 >> 11) >= 0b11101;
+            let target = if wide {
+                let h2 = halfword(pc + 2).unwrap_or(0);
+                // BL (T1) and B.W (T4): 1111 0 S imm10 : 11 J1 1 J2 imm11 / 10 J1 1 J2 imm11.
+                if h1 >> 11 == 0b11110 && (h2 & 0xD000 == 0xD000 || h2 & 0xD000 == 0x9000) {
+                    let s = u32::from(h1 >> 10) & 1;
+                    let i1 = 1 ^ ((u32::from(h2) >> 13) & 1) ^ s;
+                    let i2 = 1 ^ ((u32::from(h2) >> 11) & 1) ^ s;
+                    let raw = (s << 24)
+                        | (i1 << 23)
+                        | (i2 << 22)
+                        | ((u32::from(h1) & 0x3FF) << 12)
+                        | ((u32::from(h2) & 0x7FF) << 1);
+                    let offset = ((raw << 7) as i32) >> 7; // sign-extend 25 bits
+                    Some((pc as i64 + 4 + i64::from(offset)) as u64)
+                } else {
+                    None
+                }
+            } else if h1 >> 11 == 0b11100 {
+                // B (T2): 11100 imm11.
+                let offset = ((u32::from(h1 & 0x7FF) << 21) as i32) >> 20;
+                Some((pc as i64 + 4 + i64::from(offset)) as u64)
+            } else {
+                None
+            };
+            if let Some((to, to_size, name)) = target.and_then(function_at)
+                && !(at..at + size).contains(&target.unwrap_or(0))
+                && !seen.contains(name)
+            {
+                seen.push(name.clone());
+                queue.push((*to, *to_size));
+            }
+            pc += if wide { 4 } else { 2 };
+        }
+    }
+    seen
 }

@@ -26,7 +26,7 @@ fn moving_weight_checkpoints<T: Real>(
     let mut prefix = T::zero();
     branch_checkpoints(thresholds, lo, hi, |k, x| {
         while summed < k {
-            prefix = prefix + weights[summed];
+            prefix = prefix + weights.get(summed).copied().unwrap_or(T::zero());
             summed += 1;
         }
         visit(k, x, prefix);
@@ -69,7 +69,10 @@ pub fn branch_checkpoints<T: Real>(
         }
     };
     for k in always..=thresholds.len() {
-        let r = if k == 0 { zero } else { thresholds[k - 1] };
+        let r = match k.checked_sub(1) {
+            Some(j) => thresholds.get(j).copied().unwrap_or(zero),
+            None => zero,
+        };
         // Falling: reachable down to lo from max(hi - r, 0).
         let falling_top = (hi - r).max(zero);
         // Rising: reachable from lo + r up to hi.

@@ -253,10 +253,15 @@ impl<T: Real, B: Buffer<T>> PlayBank<T, B> {
     /// `1 / (a + b_1 + ... + b_k)`, the reciprocal slope of the segment with `k` moving.
     #[inline(always)]
     fn inverse_alpha(&self, k: usize) -> T {
-        if k == 0 {
-            self.inverse_a
-        } else {
-            self.inverse_alpha.as_ref()[k - 1]
+        // `get`, not indexing: the per-sample path holds no panic (k <= n always).
+        match k.checked_sub(1) {
+            Some(j) => self
+                .inverse_alpha
+                .as_ref()
+                .get(j)
+                .copied()
+                .unwrap_or(self.inverse_a),
+            None => self.inverse_a,
         }
     }
 
@@ -269,22 +274,30 @@ impl<T: Real, B: Buffer<T>> PlayBank<T, B> {
         f_prev: T,
         limits: OutputLimits<T>,
     ) -> Solution<T> {
-        let thresholds = self.thresholds.as_ref();
-        let weights = self.weights.as_ref();
-        let memory = self.memory.as_ref();
+        // One length for the three (they are equal), so that the walk below indexes within it
+        // without a bounds check: the per-sample path holds no panic.
+        let n = self
+            .weights
+            .as_ref()
+            .len()
+            .min(self.thresholds.as_ref().len())
+            .min(self.memory.as_ref().len());
+        let thresholds = &self.thresholds.as_ref()[..n];
+        let weights = &self.weights.as_ref()[..n];
+        let memory = &self.memory.as_ref()[..n];
         let x_prev = self.input;
         let rising = f_prev <= T::zero();
         let active = if rising {
             self.rising_active
         } else {
             self.falling_active
-        };
+        }
+        .min(n);
         // The moving operators contribute b_i x to the output: w_i + r_i = x_prev rising,
         // w_i = x_prev falling, so their held part is b_i x_prev either way.
-        let moving_weight = if active == 0 {
-            T::zero()
-        } else {
-            self.prefix.as_ref()[active - 1]
+        let moving_weight = match active.checked_sub(1) {
+            Some(j) => self.prefix.as_ref().get(j).copied().unwrap_or(T::zero()),
+            None => T::zero(),
         };
         let mut segment = Segment {
             alpha: self.a + moving_weight,
@@ -311,7 +324,7 @@ impl<T: Real, B: Buffer<T>> PlayBank<T, B> {
         if rising {
             let (mut lo, mut f_lo) = (x_prev, f_prev);
             let v_max = limits.max();
-            for i in active..weights.len() {
+            for i in active..n {
                 let (w, r, b) = (memory[i], thresholds[i], weights[i]);
                 let u = (w + r).max(lo);
                 if equation.control(u, segment.alpha, segment.beta) >= v_max {
@@ -337,7 +350,7 @@ impl<T: Real, B: Buffer<T>> PlayBank<T, B> {
         } else {
             let (mut hi, mut f_hi) = (x_prev, f_prev);
             let v_min = limits.min();
-            for i in active..weights.len() {
+            for i in active..n {
                 let (w, b) = (memory[i], weights[i]);
                 let l = w.min(hi);
                 if equation.control(l, segment.alpha, segment.beta) <= v_min {
