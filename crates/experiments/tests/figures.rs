@@ -3,8 +3,12 @@
 //!
 //! Set `HYSTCOMP_KEEP_FIGURES=<dir>` to keep the figures in `<dir>` for looking at them.
 
+mod common;
+
 use std::path::{Path, PathBuf};
 use std::time::Instant;
+
+use common::{decode_png, png_colour_type};
 
 use hystcomp_experiments::Reference;
 use hystcomp_experiments::figures::{
@@ -81,24 +85,17 @@ fn out_dir() -> (Option<tempfile::TempDir>, PathBuf) {
     }
 }
 
-/// Decodes a PNG: (width, height, RGB bytes).
-fn decode_png(path: &Path) -> (u32, u32, Vec<u8>) {
-    let file = std::fs::File::open(path).expect("the PNG exists");
-    let decoder = png::Decoder::new(std::io::BufReader::new(file));
-    let mut reader = decoder.read_info().expect("a valid PNG header");
-    let mut buf = vec![0; reader.output_buffer_size()];
-    let info = reader.next_frame(&mut buf).expect("valid PNG data");
-    assert_eq!(info.color_type, png::ColorType::Rgb, "{}", path.display());
-    buf.truncate(info.buffer_size());
-    (info.width, info.height, buf)
-}
-
 /// Asserts the image is a drawn figure: not blank, several colours, dark text, and pixels
 /// close to each `colours` (the series colours).
 fn assert_drawn(path: &Path, size: (u32, u32), colours: &[[u8; 3]]) {
-    let (w, h, rgb) = decode_png(path);
+    assert_eq!(
+        png_colour_type(path),
+        png::ColorType::Rgb,
+        "{}",
+        path.display()
+    );
+    let (w, h, pixels) = decode_png(path);
     assert_eq!((w, h), size, "{}", path.display());
-    let pixels: Vec<[u8; 3]> = rgb.chunks_exact(3).map(|p| [p[0], p[1], p[2]]).collect();
     let distinct: std::collections::HashSet<[u8; 3]> = pixels.iter().copied().collect();
     assert!(
         distinct.len() >= 8,

@@ -201,14 +201,7 @@ fn chromium_renders_the_report_with_its_table() {
     assert!(dom.contains("&lt;script&gt;document.body.innerHTML = "));
 
     // The screenshot.
-    let shot = dir.join("screenshot.png");
-    run_chromium(
-        &browser,
-        &[format!("--screenshot={}", shot.display())],
-        &page,
-        &dir.join("shot.out"),
-    );
-    let (w, h, pixels) = decode_png(&shot);
+    let (w, h, pixels) = screenshot(&browser, &page, &dir);
     assert_shows_table(w, h, &pixels);
     let red = pixels.iter().filter(|p| near(**p, MISS_RED)).count();
     let green = pixels.iter().filter(|p| near(**p, PASS_GREEN)).count();

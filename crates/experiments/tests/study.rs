@@ -201,14 +201,7 @@ fn default_study_meets_the_acceptance_bounds_and_writes_a_report_chromium_shows(
             run.label
         );
     }
-    let shot = out.join("screenshot.png");
-    run_chromium(
-        &browser,
-        &[format!("--screenshot={}", shot.display())],
-        &page,
-        &out.join("shot.out"),
-    );
-    let (w, h, pixels) = decode_png(&shot);
+    let (w, h, pixels) = screenshot(&browser, &page, &out);
     assert_shows_table(w, h, &pixels);
 }
 

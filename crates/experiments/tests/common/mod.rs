@@ -1,5 +1,5 @@
-//! Shared by the report tests: headless Chromium, PNG decoding and the checks that a
-//! screenshot of a report is not blank and shows Table 3.
+//! Shared by the report and figure tests: headless Chromium, PNG decoding and the checks that
+//! a screenshot of a report is not blank and shows Table 3.
 #![allow(dead_code)]
 
 use std::path::{Path, PathBuf};
@@ -88,6 +88,30 @@ pub fn run_chromium(browser: &Path, extra: &[String], page: &Path, stdout_file: 
     assert!(status.success(), "chromium failed ({status}): {stderr}");
 }
 
+/// Screenshots `page` into `dir/screenshot.png` (Chromium's output in `dir/shot.out`) and
+/// decodes it: (width, height, RGB pixels).
+pub fn screenshot(browser: &Path, page: &Path, dir: &Path) -> (u32, u32, Vec<[u8; 3]>) {
+    let shot = dir.join("screenshot.png");
+    run_chromium(
+        browser,
+        &[format!("--screenshot={}", shot.display())],
+        page,
+        &dir.join("shot.out"),
+    );
+    decode_png(&shot)
+}
+
+/// The colour type a PNG file declares in its header.
+pub fn png_colour_type(path: &Path) -> png::ColorType {
+    let file = std::fs::File::open(path).expect("the PNG exists");
+    let reader = png::Decoder::new(std::io::BufReader::new(file))
+        .read_info()
+        .expect("a valid PNG header");
+    reader.info().color_type
+}
+
+/// Decodes a PNG (any colour type, 8 bits per channel after normalising): (width, height,
+/// RGB pixels).
 pub fn decode_png(path: &Path) -> (u32, u32, Vec<[u8; 3]>) {
     let file = std::fs::File::open(path).expect("chromium wrote the screenshot");
     let mut decoder = png::Decoder::new(std::io::BufReader::new(file));
