@@ -77,30 +77,42 @@ fn files(dir: &Path) -> (PathBuf, PathBuf) {
     (train, test)
 }
 
+/// `crossval` of `train` against `test` on the columns named `volts` and `um`, then `extra`.
+fn crossval<'a>(train: &'a Path, test: &'a Path, extra: &[&'a str]) -> Vec<&'a str> {
+    let mut args = vec![
+        "crossval",
+        "--train",
+        s(train),
+        "--test",
+        s(test),
+        "--voltage-column",
+        "volts",
+        "--displacement-column",
+        "um",
+    ];
+    args.extend_from_slice(extra);
+    args
+}
+
 #[test]
 fn exact_compensators_replay_a_noise_free_test_record_exactly() {
     let dir = tempfile::tempdir().unwrap();
     let (train, test) = files(dir.path());
     let plant_path = dir.path().join("plant.json");
     let inverse_path = dir.path().join("inverse.json");
-    let out = hystcomp(&[
-        "--json",
-        "crossval",
-        "--train",
-        s(&train),
-        "--test",
-        s(&test),
-        "--voltage-column",
-        "volts",
-        "--displacement-column",
-        "um",
-        "--test-warmup",
-        "0",
-        "--save-plant",
-        s(&plant_path),
-        "--save-inverse",
-        s(&inverse_path),
-    ]);
+    let args = crossval(
+        &train,
+        &test,
+        &[
+            "--test-warmup",
+            "0",
+            "--save-plant",
+            s(&plant_path),
+            "--save-inverse",
+            s(&inverse_path),
+        ],
+    );
+    let out = hystcomp(&[&["--json"], &args[..]].concat());
     assert!(out.status.success(), "{}", stderr(&out));
     let doc: Value = serde_json::from_slice(&out.stdout).expect("one JSON document");
     let test_report = &doc["report"]["test"];
@@ -188,19 +200,7 @@ fn a_ringing_delayed_wihc_shows_in_the_loop_saturated_count() {
     write_csv(&train, &["volts", "um"], &[&v, &y]);
     // The three-tone part only, without the ramp up from 0 V.
     write_csv(&test, &["volts", "um"], &[&tv[100..], &ty[100..]]);
-    let args = [
-        "crossval",
-        "--train",
-        s(&train),
-        "--test",
-        s(&test),
-        "--voltage-column",
-        "volts",
-        "--displacement-column",
-        "um",
-        "--test-warmup",
-        "0",
-    ];
+    let args = crossval(&train, &test, &["--test-warmup", "0"]);
     let out = hystcomp(&[&["--json"], &args[..]].concat());
     assert!(out.status.success(), "{}", stderr(&out));
     let doc: Value = serde_json::from_slice(&out.stdout).expect("one JSON document");
@@ -226,19 +226,7 @@ fn bad_test_files_are_refused_with_a_message_to_act_on() {
     let dir = tempfile::tempdir().unwrap();
     let (train, test) = files(dir.path());
     let run = |extra: &[&str]| {
-        let mut args = vec![
-            "crossval",
-            "--train",
-            s(&train),
-            "--test",
-            s(&test),
-            "--voltage-column",
-            "volts",
-            "--displacement-column",
-            "um",
-        ];
-        args.extend_from_slice(extra);
-        let out = hystcomp(&args);
+        let out = hystcomp(&crossval(&train, &test, extra));
         assert_eq!(out.status.code(), Some(1), "{}", stderr(&out));
         assert!(out.stdout.is_empty());
         stderr(&out)
@@ -273,20 +261,7 @@ fn bad_test_files_are_refused_with_a_message_to_act_on() {
         (&train, &missing, ["missing.csv", "check the path"]),
         (&empty, &test, ["empty.csv", "no rows"]),
     ] {
-        assert_fails(
-            &[
-                "crossval",
-                "--train",
-                s(train),
-                "--test",
-                s(test),
-                "--voltage-column",
-                "volts",
-                "--displacement-column",
-                "um",
-            ],
-            &fragments,
-        );
+        assert_fails(&crossval(train, test, &[]), &fragments);
     }
     // The same column for both (in the training file).
     assert_fails(
@@ -315,17 +290,7 @@ fn saved_models_never_overwrite_a_record_or_each_other() {
         std::fs::read(&test).unwrap(),
     );
     let model = dir.path().join("model.json");
-    let base = [
-        "crossval",
-        "--train",
-        s(&train),
-        "--test",
-        s(&test),
-        "--voltage-column",
-        "volts",
-        "--displacement-column",
-        "um",
-    ];
+    let base = crossval(&train, &test, &[]);
     for (extra, fragment) in [
         (
             vec!["--save-plant", s(&model), "--save-inverse", s(&model)],
