@@ -110,9 +110,11 @@ fn firmware() -> Option<PathBuf> {
 #[test]
 fn compensators_build_for_a_cortex_m4f_without_an_allocator() {
     let Some(image) = firmware() else {
-        eprintln!(
-            "note: the {TARGET} target is not installed and rustup could not add it; building \
-             hystcomp-core without default features (no std, no alloc) on the host instead"
+        hystcomp_testkit::require_tool(
+            TARGET,
+            false,
+            "rustup target add thumbv7em-none-eabihf; without it this test builds hystcomp-core \
+             without default features (no std, no alloc) on the host instead",
         );
         let root = workspace_root();
         run(

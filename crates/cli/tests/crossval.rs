@@ -11,11 +11,6 @@ use hystcomp_core::Mpim;
 use hystcomp_io::model_file::{Direction, ModelFile};
 use serde_json::Value;
 
-const DBO: &str = concat!(
-    env!("CARGO_MANIFEST_DIR"),
-    "/../../../shared/data/dbo-micromanipulator/"
-);
-
 /// Table 1 driven by `voltage` (0..10 V), in um with an offset of 5 um.
 fn displacement(voltage: &[f64]) -> Vec<f64> {
     let thresholds = [0.0, 0.1, 0.2, 0.3, 0.4, 0.5, 0.6, 0.7, 0.8, 0.9];
@@ -330,15 +325,12 @@ fn saved_models_never_overwrite_a_record_or_each_other() {
 
 #[test]
 fn dbo_records_cross_validate_within_sane_bounds() {
-    let train = Path::new(DBO).join("Model_Vi_Do.dat");
-    let test = Path::new(DBO).join("Test_Vi_Do_Di.dat");
-    if !train.exists() || !test.exists() {
-        eprintln!(
-            "SKIPPED (checks nothing): the DBO records Model_Vi_Do.dat and Test_Vi_Do_Di.dat \
-             are absent from {DBO}"
-        );
+    let (Some(train), Some(test)) = (
+        hystcomp_testkit::dbo_record("Model_Vi_Do.dat"),
+        hystcomp_testkit::dbo_record("Test_Vi_Do_Di.dat"),
+    ) else {
         return;
-    }
+    };
     let out = hystcomp(&[
         "--json",
         "crossval",

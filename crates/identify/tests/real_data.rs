@@ -5,8 +5,6 @@
 //! are about 1.5 times the figures measured when the normalisation became that of the fitted
 //! samples (warm-up excluded), so that a regression of a third shows.
 
-use std::path::Path;
-
 use hystcomp_identify::{
     CrossvalOptions, IdentifyOptions, Method, NoObserver, PsoOptions, Record, Thresholds, crossval,
     identify,
@@ -14,22 +12,9 @@ use hystcomp_identify::{
 use hystcomp_io::data::{Column, ReadOptions, read_columns};
 use hystcomp_io::model_file::Direction;
 
-const DATA: &str = concat!(
-    env!("CARGO_MANIFEST_DIR"),
-    "/../../../shared/data/dbo-micromanipulator/"
-);
-
 /// Columns 1 (voltage) and 5 (sensor) of a DBO file, or `None` (with a message) when absent.
 fn record(file: &str) -> Option<(Vec<f64>, Vec<f64>)> {
-    let path = Path::new(DATA).join(file);
-    if !path.exists() {
-        eprintln!(
-            "SKIPPED (checks nothing): the real data file {} is absent; put the DBO \
-             micromanipulator records there to run this test",
-            path.display()
-        );
-        return None;
-    }
+    let path = hystcomp_testkit::dbo_record(file)?;
     let columns = read_columns(
         &path,
         &[Column::Index(1), Column::Index(5)],

@@ -1521,20 +1521,7 @@ fn a_wrong_delimiter_gets_a_hint() {
 // ---------------------------------------------------------------------------------------------
 
 fn dbo(name: &str) -> Option<PathBuf> {
-    let path = Path::new(concat!(
-        env!("CARGO_MANIFEST_DIR"),
-        "/../../../shared/data/dbo-micromanipulator"
-    ))
-    .join(name);
-    if path.is_file() {
-        Some(path)
-    } else {
-        eprintln!(
-            "skipping: the real record {} is not present",
-            path.display()
-        );
-        None
-    }
+    hystcomp_testkit::dbo_record(name)
 }
 
 #[test]
@@ -1675,7 +1662,7 @@ fn atomic_write_in_a_read_only_directory_keeps_the_old_file() {
     if writable {
         fs::remove_file(&probe).expect("removing the probe");
         fs::set_permissions(&locked, fs::Permissions::from_mode(0o755)).expect("restore");
-        eprintln!("skipping: this user can write into read-only directories (root?)");
+        hystcomp_testkit::skip("this user can write into read-only directories (root?)");
         return;
     }
     let result = write_atomic(&path, b"new");

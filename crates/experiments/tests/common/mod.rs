@@ -30,7 +30,7 @@ pub fn chromium() -> Option<PathBuf> {
     });
     if found.is_none() {
         if std::env::var("HYSTCOMP_SKIP_BROWSER_TESTS").as_deref() == Ok("1") {
-            eprintln!("skipped: no chromium found and HYSTCOMP_SKIP_BROWSER_TESTS=1");
+            hystcomp_testkit::skip("no chromium found and HYSTCOMP_SKIP_BROWSER_TESTS=1");
             return None;
         }
         panic!(
