@@ -1,5 +1,6 @@
-//! The committed C header `include/hystcomp.h` must be what cbindgen makes of `src/lib.rs` with
-//! `cbindgen.toml` (faer's lesson: a committed header and a check that fails when it is stale).
+//! The committed C header `include/hystcomp.h` must be what cbindgen makes of `src/lib.rs` and
+//! the modules it declares, with `cbindgen.toml` (faer's lesson: a committed header and a check
+//! that fails when it is stale).
 //!
 //! Regenerate it with `HYSTCOMP_UPDATE_HEADER=1 cargo test -p hystcomp-c --test header`.
 
@@ -15,7 +16,7 @@ fn generated_header() -> Vec<u8> {
         .with_config(config)
         .with_src(crate_dir.join("src/lib.rs"))
         .generate()
-        .expect("cbindgen can parse src/lib.rs");
+        .expect("cbindgen can parse src/lib.rs and its modules");
     let mut text = Vec::new();
     bindings.write(&mut text);
     text
@@ -43,19 +44,37 @@ fn committed_header_is_current() {
             .count();
         panic!(
             "bindings/c/include/hystcomp.h is stale (first difference at line {line}): the C ABI \
-             in bindings/c/src/lib.rs changed. Regenerate the header with\n    {REGENERATE}\n\
+             in bindings/c/src changed. Regenerate the header with\n    {REGENERATE}\n\
              and commit it."
         );
     }
 }
 
+/// The text of every Rust source file of the crate (`src/*.rs`).
+fn sources() -> Vec<(String, String)> {
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("src");
+    let mut files: Vec<_> = std::fs::read_dir(&dir)
+        .expect("src/ is readable")
+        .map(|entry| entry.expect("src/ entries are readable").path())
+        .filter(|path| path.extension().is_some_and(|e| e == "rs"))
+        .collect();
+    files.sort();
+    files
+        .into_iter()
+        .map(|path| {
+            let text = std::fs::read_to_string(&path).expect("sources are UTF-8");
+            (path.display().to_string(), text)
+        })
+        .collect()
+}
+
 #[test]
 fn header_declares_every_exported_function() {
     let header = String::from_utf8(generated_header()).expect("the header is UTF-8");
-    let source = include_str!("../src/lib.rs");
-    let exported: Vec<&str> = source
-        .split("extern \"C\" fn ")
-        .skip(1)
+    let sources = sources();
+    let exported: Vec<&str> = sources
+        .iter()
+        .flat_map(|(_, text)| text.split("extern \"C\" fn ").skip(1))
         .filter_map(|rest| rest.split('(').next())
         .collect();
     assert!(exported.len() >= 15, "found only {exported:?}");
