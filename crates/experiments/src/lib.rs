@@ -14,6 +14,7 @@ pub mod figures;
 pub mod indices;
 pub mod reference;
 pub mod report;
+pub mod signals;
 pub mod study;
 pub mod study_report;
 pub mod trajectory;
