@@ -1,8 +1,18 @@
 //! `hystcomp`: the command line of the toolkit. Argument parsing, file formats, progress bars,
 //! exit codes and messages for people live here; the maths lives in the library crates.
+//!
+//! Two rules hold for every subcommand, and the structure below makes them the default:
+//! - no command overwrites one of its inputs: its arguments implement [`files::NamesFiles`],
+//!   and [`run`] checks them before the command reads anything;
+//! - nothing panics on a closed pipe: output goes through `outln!` / `errln!` ([`out`]);
+//!   `println!` and `eprintln!` are denied.
+#![deny(clippy::print_stdout, clippy::print_stderr)]
 
+#[macro_use]
+mod out;
 mod commands;
 mod error;
+mod files;
 #[allow(dead_code)]
 mod progress;
 
@@ -11,6 +21,7 @@ use std::process::ExitCode;
 use clap::{Parser, Subcommand};
 
 pub use error::CliError;
+use files::NamesFiles;
 
 /// Feedforward hysteresis compensation for piezoelectric nanopositioners.
 #[derive(Debug, Parser)]
@@ -52,26 +63,36 @@ pub struct Context {
 /// Prints `value` as the one JSON document of a `--json` run.
 pub fn print_json<T: serde::Serialize>(value: &T) -> Result<(), CliError> {
     let text = serde_json::to_string_pretty(value).map_err(|e| CliError::output(e.to_string()))?;
-    println!("{text}");
-    Ok(())
+    outln!("{text}")
+}
+
+/// Runs one subcommand: refuses outputs that name one of its inputs, before anything is read,
+/// then runs it.
+fn run<A: NamesFiles>(
+    args: &A,
+    ctx: Context,
+    command: fn(&A, Context) -> Result<(), CliError>,
+) -> Result<(), CliError> {
+    args.files().check()?;
+    command(args, ctx)
 }
 
 fn main() -> ExitCode {
     let cli = Cli::parse();
     let ctx = Context { json: cli.json };
     let result = match &cli.command {
-        Command::Compensate(args) => commands::compensate::run(args, ctx),
-        Command::Bench(args) => commands::bench::run(args, ctx),
-        Command::Identify(args) => commands::identify::run(args, ctx),
-        Command::Crossval(args) => commands::crossval::run(args, ctx),
-        Command::Simulate(args) => commands::simulate::run(args, ctx),
-        Command::Reproduce(args) => commands::reproduce::run(args, ctx),
-        Command::Evaluate(args) => commands::evaluate::run(args, ctx),
+        Command::Compensate(args) => run(args, ctx, commands::compensate::run),
+        Command::Bench(args) => run(args, ctx, commands::bench::run),
+        Command::Identify(args) => run(args, ctx, commands::identify::run),
+        Command::Crossval(args) => run(args, ctx, commands::crossval::run),
+        Command::Simulate(args) => run(args, ctx, commands::simulate::run),
+        Command::Reproduce(args) => run(args, ctx, commands::reproduce::run),
+        Command::Evaluate(args) => run(args, ctx, commands::evaluate::run),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
         Err(error) => {
-            eprintln!("hystcomp: error: {error}");
+            errln!("hystcomp: error: {error}");
             ExitCode::from(error.exit_code())
         }
     }

@@ -13,6 +13,7 @@ use hystcomp_experiments::Reference;
 use hystcomp_io::model_file::{Direction, ModelFile};
 use serde::Serialize;
 
+use crate::files::{Files, NamesFiles};
 use crate::{CliError, Context};
 
 /// Arguments of `hystcomp bench`.
@@ -28,6 +29,12 @@ pub struct Args {
     /// model, IHC and WIHC; an inverse model times DIHC.
     #[arg(long, value_name = "FILE")]
     model: Option<PathBuf>,
+}
+
+impl NamesFiles for Args {
+    fn files(&self) -> Files<'_> {
+        Files::new().maybe_input("--model", self.model.as_ref())
+    }
 }
 
 /// One measured figure.
@@ -245,11 +252,12 @@ pub fn run(args: &Args, ctx: Context) -> Result<(), CliError> {
         crate::print_json(&report)?;
         return Ok(());
     }
-    println!(
+    outln!(
         "per-sample cost, ns (median of {} runs of {} samples; fastest in brackets)",
-        report.repeats, report.samples
-    );
-    println!("{:<14} {:>10} {:>22} {:>22}", "", "operators", "f64", "f32");
+        report.repeats,
+        report.samples
+    )?;
+    outln!("{:<14} {:>10} {:>22} {:>22}", "", "operators", "f64", "f32")?;
     let mut rows: Vec<(&str, String, usize)> = Vec::new();
     for f in &report.figures {
         let key = (f.what, f.model.clone(), f.operators);
@@ -271,14 +279,14 @@ pub fn run(args: &Args, ctx: Context) -> Result<(), CliError> {
                 .map(|f| format!("{:.1} ({:.1})", f.median_ns_per_sample, f.min_ns_per_sample))
                 .unwrap_or_else(|| "-".into())
         };
-        println!(
+        outln!(
             "{:<14} {:>10} {:>22} {:>22}   {}",
             what,
             n,
             cell("f64"),
             cell("f32"),
             model
-        );
+        )?;
     }
     Ok(())
 }

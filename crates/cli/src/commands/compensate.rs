@@ -8,6 +8,7 @@ use hystcomp_io::model_file::ModelFile;
 use serde::Serialize;
 
 use crate::error::EXIT_SATURATED;
+use crate::files::{Files, NamesFiles};
 use crate::{CliError, Context};
 
 /// Arguments of `hystcomp compensate`.
@@ -48,6 +49,15 @@ pub struct Args {
     /// counted either way, and the drive file is written).
     #[arg(long)]
     allow_saturation: bool,
+}
+
+impl NamesFiles for Args {
+    fn files(&self) -> Files<'_> {
+        Files::new()
+            .input("--model", &self.model)
+            .input("--trajectory", &self.trajectory)
+            .output("--output", &self.output)
+    }
 }
 
 fn parse_method(s: &str) -> Result<Method, String> {
@@ -126,7 +136,7 @@ pub fn run(args: &Args, ctx: Context) -> Result<(), CliError> {
     if args.method == Method::WihcDelayed
         && let Some(gain) = compensator.delayed_loop_gain().filter(|g| *g >= 1.0)
     {
-        eprintln!(
+        errln!(
             "hystcomp: warning: the delayed WIHC's loop gain on this model is {gain:.3} (>= 1: \
              max |3 a1 x^2 + b_1 + ... + b_k| / a2 over the drive limits), so after a jump in the \
              desired position its drive can ring between the limits; --method wihc solves \
@@ -190,7 +200,7 @@ pub fn run(args: &Args, ctx: Context) -> Result<(), CliError> {
     if ctx.json {
         crate::print_json(&report)?;
     } else {
-        println!(
+        outln!(
             "{}: {} samples through {} -> {} (drive {:.4} .. {:.4} {}, limits {:.4} .. {:.4} {})",
             report.trajectory,
             report.samples,
@@ -202,7 +212,7 @@ pub fn run(args: &Args, ctx: Context) -> Result<(), CliError> {
             report.limits.0,
             report.limits.1,
             report.control_unit,
-        );
+        )?;
     }
     let mut problems = Vec::new();
     if report.unreachable > 0 {
@@ -216,7 +226,7 @@ pub fn run(args: &Args, ctx: Context) -> Result<(), CliError> {
     }
     let mut message = problems.join(". Also, ");
     if args.allow_saturation {
-        eprintln!("hystcomp: warning: {message}");
+        errln!("hystcomp: warning: {message}");
         Ok(())
     } else {
         message.push_str(

@@ -8,9 +8,8 @@ use hystcomp_io::data::{Column, RowRange};
 use hystcomp_io::model_file::Direction;
 use serde::Serialize;
 
-use super::identify::{
-    CONSTRAINTS_HELP, ColumnArgs, FitArgs, check_distinct_paths, fit_error, load, print_fit,
-};
+use super::identify::{CONSTRAINTS_HELP, ColumnArgs, FitArgs, fit_error, load, print_fit};
+use crate::files::{Files, NamesFiles};
 use crate::progress::Bar;
 use crate::{CliError, Context};
 
@@ -64,6 +63,16 @@ pub struct Args {
     pub save_inverse: Option<PathBuf>,
 }
 
+impl NamesFiles for Args {
+    fn files(&self) -> Files<'_> {
+        Files::new()
+            .input("--train", &self.train)
+            .input("--test", &self.test)
+            .maybe_output("--save-plant", self.save_plant.as_ref())
+            .maybe_output("--save-inverse", self.save_inverse.as_ref())
+    }
+}
+
 fn parse_rows(text: &str) -> Result<RowRange, String> {
     let text = if !text.contains("..") {
         text.replacen(':', "..", 1)
@@ -85,17 +94,6 @@ struct Output<'a> {
 
 /// Runs `hystcomp crossval`.
 pub fn run(args: &Args, ctx: Context) -> Result<(), CliError> {
-    let mut outputs: Vec<(&str, &std::path::Path)> = Vec::new();
-    if let Some(p) = &args.save_plant {
-        outputs.push(("--save-plant", p));
-    }
-    if let Some(p) = &args.save_inverse {
-        outputs.push(("--save-inverse", p));
-    }
-    check_distinct_paths(
-        &[("--train", &args.train), ("--test", &args.test)],
-        &outputs,
-    )?;
     let c = &args.columns;
     let train = load(
         &args.train,
@@ -182,20 +180,20 @@ pub fn run(args: &Args, ctx: Context) -> Result<(), CliError> {
         crate::print_json(&output)?;
         return Ok(());
     }
-    println!("identified on {}:", args.train.display());
-    println!("plant model (voltage -> displacement, for IHC and WIHC):");
-    print_fit(&report.plant);
-    println!("inverse model (displacement -> voltage, for DIHC):");
-    print_fit(&report.inverse);
+    outln!("identified on {}:", args.train.display())?;
+    outln!("plant model (voltage -> displacement, for IHC and WIHC):")?;
+    print_fit(&report.plant)?;
+    outln!("inverse model (displacement -> voltage, for DIHC):")?;
+    print_fit(&report.inverse)?;
     let t = &report.test;
     let f = &t.forward;
-    println!(
+    outln!(
         "validated on {} ({} samples, the first {} left out as warm-up):",
         args.test.display(),
         t.samples,
         t.warmup
-    );
-    println!(
+    )?;
+    outln!(
         "  forward prediction of the displacement: RMS {:.3} %, max {:.3} % of its range \
          ({:.4} {unit}); mean error {:.4} {unit}, RMS without it {:.3} %",
         f.rms_percent,
@@ -204,41 +202,54 @@ pub fn run(args: &Args, ctx: Context) -> Result<(), CliError> {
         f.mean,
         f.std_percent,
         unit = c.displacement_unit
-    );
+    )?;
     if t.voltage_outside_model_range > 0 || t.displacement_outside_model_range > 0 {
-        println!(
+        outln!(
             "  outside the training ranges: {} voltage and {} displacement samples",
-            t.voltage_outside_model_range, t.displacement_outside_model_range
-        );
+            t.voltage_outside_model_range,
+            t.displacement_outside_model_range
+        )?;
     }
-    println!(
+    outln!(
         "  offline inverse replay (measured displacement in, voltage out, vs the voltage \
          applied; % of the test voltage range, limits {} .. {} {}):",
-        t.voltage_limits[0], t.voltage_limits[1], c.voltage_unit
-    );
-    println!(
+        t.voltage_limits[0],
+        t.voltage_limits[1],
+        c.voltage_unit
+    )?;
+    outln!(
         "    {:14} {:>9} {:>9} {:>12} {:>10} {:>10}",
-        "compensator", "RMS %", "max %", "mean", "saturated", "loop-sat."
-    );
+        "compensator",
+        "RMS %",
+        "max %",
+        "mean",
+        "saturated",
+        "loop-sat."
+    )?;
     for r in &t.replay {
         match (&r.error, &r.failure) {
-            (Some(e), _) => println!(
+            (Some(e), _) => outln!(
                 "    {:14} {:>9.3} {:>9.3} {:>12.5} {:>10} {:>10}",
-                r.compensator, e.rms_percent, e.max_percent, e.mean, r.saturated, r.loop_saturated
-            ),
-            (None, failure) => println!(
+                r.compensator,
+                e.rms_percent,
+                e.max_percent,
+                e.mean,
+                r.saturated,
+                r.loop_saturated
+            )?,
+            (None, failure) => outln!(
                 "    {:14} not built: {}",
                 r.compensator,
                 failure.as_deref().unwrap_or("unknown reason")
-            ),
+            )?,
         }
     }
     if t.replay.iter().any(|r| r.loop_saturated > 0) {
-        println!(
+        outln!(
             "  loop-sat.: samples clamped to a limit although the displacement was reachable: \
              the one-sample-delayed loop lagged or rang after a jump (the exact ihc and wihc \
              do not)"
-        );
+        )?;
     }
     Ok(())
 }

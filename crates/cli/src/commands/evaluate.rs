@@ -7,6 +7,7 @@ use hystcomp_experiments::indices::DEFAULT_MHE_BINS;
 use hystcomp_io::data::{self, Column, DataError, Delimiter, Header, ReadOptions, RowRange};
 use serde::Serialize;
 
+use crate::files::{Files, NamesFiles};
 use crate::{CliError, Context};
 
 /// Arguments of `hystcomp evaluate`.
@@ -44,6 +45,14 @@ pub struct Args {
     /// Whether the files start with column names: auto, present or absent.
     #[arg(long, default_value = "auto")]
     header: Header,
+}
+
+impl NamesFiles for Args {
+    fn files(&self) -> Files<'_> {
+        Files::new()
+            .input("--desired", &self.desired)
+            .input("--measured", &self.measured)
+    }
 }
 
 #[derive(Serialize)]
@@ -164,7 +173,7 @@ pub fn run(args: &Args, ctx: Context) -> Result<(), CliError> {
     if ctx.json {
         crate::print_json(&report)?;
     } else {
-        println!(
+        outln!(
             "{} samples, y_d from {:.4} to {:.4}\ne_mhe = {:.3} % ({} bins)\ne_m   = {:.3} %\ne_rms = {:.3} %",
             report.samples,
             range.0,
@@ -173,7 +182,7 @@ pub fn run(args: &Args, ctx: Context) -> Result<(), CliError> {
             indices.mhe_bins,
             indices.e_m_percent,
             indices.e_rms_percent
-        );
+        )?;
     }
     Ok(())
 }

@@ -10,6 +10,7 @@ use hystcomp_io::data::{self, Column, Delimiter, Header, ReadOptions, RowRange};
 use hystcomp_io::model_file::Direction;
 use serde::Serialize;
 
+use crate::files::{Files, NamesFiles};
 use crate::progress::Bar;
 use crate::{CliError, Context};
 
@@ -198,6 +199,14 @@ pub struct Args {
     /// Where to write the model file (JSON, written atomically).
     #[arg(short, long, value_name = "MODEL.json")]
     pub output: PathBuf,
+}
+
+impl NamesFiles for Args {
+    fn files(&self) -> Files<'_> {
+        Files::new()
+            .input("--data", &self.data)
+            .output("--output", &self.output)
+    }
 }
 
 fn parse_rows(text: &str) -> Result<RowRange, String> {
@@ -466,14 +475,17 @@ struct Output<'a> {
 }
 
 /// Prints a fit report for people.
-pub fn print_fit(report: &hystcomp_identify::FitReport) {
+pub fn print_fit(report: &hystcomp_identify::FitReport) -> Result<(), CliError> {
     let unit = &report.output.unit;
     let s = &report.samples;
-    println!(
+    outln!(
         "  samples: {} in the record, {} warm-up, {} fitted, {} held out",
-        s.total, s.warmup, s.fit, s.holdout
-    );
-    println!(
+        s.total,
+        s.warmup,
+        s.fit,
+        s.holdout
+    )?;
+    outln!(
         "  {} {} .. {} {} -> {} {} .. {} {} (fitted ranges; {} play operator{}, condition \
          number {:.3e})",
         report.input.quantity,
@@ -491,18 +503,24 @@ pub fn print_fit(report: &hystcomp_identify::FitReport) {
             "s"
         },
         report.condition_number
-    );
-    println!(
+    )?;
+    outln!(
         "  fit:      RMS {:.4} % ({:.4} {unit}), max {:.4} % ({:.4} {unit}) of the output range",
-        report.fit.rms_percent, report.fit.rms, report.fit.max_percent, report.fit.max
-    );
+        report.fit.rms_percent,
+        report.fit.rms,
+        report.fit.max_percent,
+        report.fit.max
+    )?;
     if let Some(h) = &report.holdout {
-        println!(
+        outln!(
             "  held out: RMS {:.4} % ({:.4} {unit}), max {:.4} % ({:.4} {unit})",
-            h.rms_percent, h.rms, h.max_percent, h.max
-        );
+            h.rms_percent,
+            h.rms,
+            h.max_percent,
+            h.max
+        )?;
     }
-    println!(
+    outln!(
         "  solver: {} ({}), {} of {} constraints active{}, smallest branch slope {:.4} \
          (margin {}), {:.1} ms",
         report.solver,
@@ -516,7 +534,7 @@ pub fn print_fit(report: &hystcomp_identify::FitReport) {
         report.min_branch_slope,
         report.margin,
         report.elapsed_s * 1e3
-    );
+    )
 }
 
 /// A library error of a fit on `loaded` (read from `path`) for the user: the file's name, and
@@ -541,55 +559,8 @@ pub fn fit_error(error: IdentifyError, path: &Path, loaded: &Loaded) -> CliError
     CliError::from(error).context(context)
 }
 
-/// The path as the file system resolves it: canonical when the file exists, else its
-/// directory canonical (when that exists) joined with its name.
-fn resolved(path: &Path) -> PathBuf {
-    if let Ok(p) = path.canonicalize() {
-        return p;
-    }
-    let absolute = std::path::absolute(path).unwrap_or_else(|_| path.to_owned());
-    match (absolute.parent(), absolute.file_name()) {
-        (Some(dir), Some(name)) => dir
-            .canonicalize()
-            .map(|d| d.join(name))
-            .unwrap_or_else(|_| absolute.clone()),
-        _ => absolute,
-    }
-}
-
-/// Refuses output paths that are the same file as an input or as another output (so that
-/// writing a model never destroys a measured record or another result).
-pub fn check_distinct_paths(
-    inputs: &[(&str, &Path)],
-    outputs: &[(&str, &Path)],
-) -> Result<(), CliError> {
-    for (k, (output, out_path)) in outputs.iter().enumerate() {
-        let out = resolved(out_path);
-        for (input, in_path) in inputs {
-            if resolved(in_path) == out {
-                return Err(CliError::input(format!(
-                    "{output} {} is the same file as {input}: writing the model there would \
-                     destroy the record; give another output path",
-                    out_path.display()
-                )));
-            }
-        }
-        for (other, other_path) in &outputs[..k] {
-            if resolved(other_path) == out {
-                return Err(CliError::input(format!(
-                    "{other} and {output} are the same file ({}): one model would overwrite \
-                     the other; give two different paths",
-                    out_path.display()
-                )));
-            }
-        }
-    }
-    Ok(())
-}
-
 /// Runs `hystcomp identify`.
 pub fn run(args: &Args, ctx: Context) -> Result<(), CliError> {
-    check_distinct_paths(&[("--data", &args.data)], &[("--output", &args.output)])?;
     let c = &args.columns;
     let loaded = load(
         &args.data,
@@ -632,13 +603,13 @@ pub fn run(args: &Args, ctx: Context) -> Result<(), CliError> {
         };
         crate::print_json(&output)?;
     } else {
-        println!(
+        outln!(
             "{} model identified from {} -> {}",
             args.direction,
             args.data.display(),
             args.output.display()
-        );
-        print_fit(&fit.report);
+        )?;
+        print_fit(&fit.report)?;
     }
     Ok(())
 }

@@ -8,6 +8,7 @@ use hystcomp_experiments::{RunMeta, StudyOptions, run_study, summarize, write_ou
 use hystcomp_stage::StageConfig;
 use serde::Serialize;
 
+use crate::files::{Files, NamesFiles};
 use crate::progress::Bar;
 use crate::{CliError, Context};
 
@@ -33,6 +34,14 @@ pub struct Args {
     /// Periods of the paper's trajectory to track (10 s each; indices on the last; 2 to 20).
     #[arg(long, default_value_t = 2)]
     periods: usize,
+}
+
+impl NamesFiles for Args {
+    fn files(&self) -> Files<'_> {
+        Files::new()
+            .maybe_input("--stage", self.stage.as_ref())
+            .output_directory("--out", &self.out)
+    }
 }
 
 /// An observer drawing one progress bar per step of the study.
@@ -144,12 +153,12 @@ pub fn run(args: &Args, ctx: Context) -> Result<(), CliError> {
         };
         crate::print_json(&output)?;
     } else {
-        print!("{summary}");
-        println!(
+        out!("{summary}")?;
+        outln!(
             "report: {} (figures, models/ and study.json beside it); study computed in {:.1} s",
             files.report.display(),
             study.elapsed_s
-        );
+        )?;
     }
     Ok(())
 }

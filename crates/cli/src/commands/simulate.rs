@@ -5,6 +5,7 @@ use std::path::PathBuf;
 use hystcomp_io::data::{self, Column, DataError, ReadOptions};
 use hystcomp_stage::{Stage, StageConfig, StageResponse};
 
+use crate::files::{Files, NamesFiles};
 use crate::{CliError, Context};
 
 /// Arguments of `hystcomp simulate`.
@@ -37,6 +38,15 @@ pub struct Args {
     /// Seed of the sensor noise (the same seed gives the same output).
     #[arg(long, default_value_t = 0)]
     pub seed: u64,
+}
+
+impl NamesFiles for Args {
+    fn files(&self) -> Files<'_> {
+        Files::new()
+            .maybe_input("--stage", self.stage.as_ref())
+            .input("--input", &self.input)
+            .output("--output", &self.output)
+    }
 }
 
 /// Largest relative difference allowed between the input's time step and the stage's period.
@@ -167,14 +177,14 @@ pub fn run(args: &Args, ctx: Context) -> Result<(), CliError> {
         crate::print_json(&document)?;
     } else {
         let clamped = response.clamps.dac_clamped + response.clamps.amplifier_clamped;
-        println!(
+        outln!(
             "simulated {} samples ({} s) on {stage_name}; wrote {}",
             time.len(),
             time.len() as f64 / config.sample_rate_hz,
             args.output.display()
-        );
+        )?;
         if clamped > 0 {
-            eprintln!(
+            errln!(
                 "warning: {} command samples were outside the DAC span and {} outside the \
                  amplifier's {}..{} V rails once amplified; they were clamped",
                 response.clamps.dac_clamped,
@@ -186,7 +196,7 @@ pub fn run(args: &Args, ctx: Context) -> Result<(), CliError> {
     }
     if response.clamps.adc_clamped > 0 {
         // On stderr in both modes: the measured positions in the output file are wrong there.
-        eprintln!(
+        errln!(
             "warning: {} samples of the sensor reading lay outside the ADC's span ({}..{} V, \
              i.e. {:.2}..{:.2} um at sensor.sensitivity_v_per_um = {}): measured_position_um \
              is saturated there; widen adc.min_v/adc.max_v or lower the sensitivity",

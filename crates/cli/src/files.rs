@@ -1,0 +1,316 @@
+//! The files a command reads and writes, and the rule that no command overwrites one of its
+//! own inputs.
+//!
+//! Every subcommand's arguments implement [`NamesFiles`]: they list their input files and
+//! their outputs (files, or directories the command fills), each with the option that named
+//! it. `main` checks the list with [`Files::check`] before the command reads anything, so a
+//! new command gets the protection by implementing the trait (it cannot be dispatched
+//! without it):
+//!
+//! ```ignore
+//! impl NamesFiles for Args {
+//!     fn files(&self) -> Files<'_> {
+//!         Files::new()
+//!             .input("--model", &self.model)
+//!             .input("--desired", &self.desired)
+//!             .output("--output", &self.output)
+//!     }
+//! }
+//! ```
+//!
+//! Two paths are the same file when they resolve to the same canonical path (following
+//! symbolic links, `..` and the like) or, on Unix, to the same device and inode (hard links).
+//! An output that does not exist yet is resolved through its folder.
+
+use std::path::{Component, Path, PathBuf};
+
+use crate::CliError;
+
+/// The files of one run of a command, each named by the option that gave it.
+#[derive(Debug, Default)]
+pub struct Files<'a> {
+    inputs: Vec<(&'static str, &'a Path)>,
+    outputs: Vec<(&'static str, &'a Path, Kind)>,
+}
+
+/// What an output path is.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Kind {
+    /// One file, replaced (atomically) by the command.
+    File,
+    /// A directory the command creates files in.
+    Directory,
+}
+
+/// The arguments of a command that reads or writes files: every subcommand implements it.
+pub trait NamesFiles {
+    /// The inputs and outputs of this run.
+    fn files(&self) -> Files<'_>;
+}
+
+impl<'a> Files<'a> {
+    /// No files.
+    pub fn new() -> Self {
+        Self::default()
+    }
+
+    /// An input file named by `option` (e.g. `"--model"`).
+    pub fn input(mut self, option: &'static str, path: &'a Path) -> Self {
+        self.inputs.push((option, path));
+        self
+    }
+
+    /// An optional input file.
+    pub fn maybe_input(self, option: &'static str, path: Option<&'a PathBuf>) -> Self {
+        match path {
+            Some(path) => self.input(option, path),
+            None => self,
+        }
+    }
+
+    /// An output file named by `option` (e.g. `"--output"`).
+    pub fn output(mut self, option: &'static str, path: &'a Path) -> Self {
+        self.outputs.push((option, path, Kind::File));
+        self
+    }
+
+    /// An optional output file.
+    pub fn maybe_output(self, option: &'static str, path: Option<&'a PathBuf>) -> Self {
+        match path {
+            Some(path) => self.output(option, path),
+            None => self,
+        }
+    }
+
+    /// An output directory: the command writes files into it, so no input may lie anywhere
+    /// inside it.
+    pub fn output_directory(mut self, option: &'static str, path: &'a Path) -> Self {
+        self.outputs.push((option, path, Kind::Directory));
+        self
+    }
+
+    /// Refuses outputs that are one of the inputs (or, for a directory, hold one), and
+    /// outputs that are the same file as another output. Touches no file's contents.
+    pub fn check(&self) -> Result<(), CliError> {
+        let inputs: Vec<(&str, &Path, Resolved)> = self
+            .inputs
+            .iter()
+            .map(|(option, path)| (*option, *path, Resolved::new(path)))
+            .collect();
+        let outputs: Vec<(&str, &Path, Kind, Resolved)> = self
+            .outputs
+            .iter()
+            .map(|(option, path, kind)| (*option, *path, *kind, Resolved::new(path)))
+            .collect();
+        for (k, (output, out_path, kind, out)) in outputs.iter().enumerate() {
+            for (input, in_path, resolved_input) in &inputs {
+                match kind {
+                    Kind::File if out.same_file(resolved_input) => {
+                        return Err(CliError::input(format!(
+                            "{output} {} is the same file as {input} {}: writing there would \
+                             destroy the input; give another output path",
+                            out_path.display(),
+                            in_path.display()
+                        )));
+                    }
+                    Kind::Directory if resolved_input.path.starts_with(&out.path) => {
+                        return Err(CliError::input(format!(
+                            "{output} {} holds the input {input} {}: the command writes its \
+                             files there and could replace it; give another directory or \
+                             move the input",
+                            out_path.display(),
+                            in_path.display()
+                        )));
+                    }
+                    _ => {}
+                }
+            }
+            for (other, other_path, other_kind, resolved_other) in &outputs[..k] {
+                let clash = match (kind, other_kind) {
+                    (Kind::File, Kind::File) => out.same_file(resolved_other),
+                    (Kind::File, Kind::Directory) => out.path.starts_with(&resolved_other.path),
+                    (Kind::Directory, Kind::File) => resolved_other.path.starts_with(&out.path),
+                    (Kind::Directory, Kind::Directory) => {
+                        out.path.starts_with(&resolved_other.path)
+                            || resolved_other.path.starts_with(&out.path)
+                    }
+                };
+                if clash {
+                    return Err(CliError::input(format!(
+                        "{other} and {output} name the same place ({} and {}): one result \
+                         would overwrite the other; give two different paths",
+                        other_path.display(),
+                        out_path.display()
+                    )));
+                }
+            }
+        }
+        Ok(())
+    }
+}
+
+/// A path as the file system resolves it.
+#[derive(Debug)]
+struct Resolved {
+    /// Canonical when the file exists; else its nearest existing ancestor canonical, joined
+    /// with the rest (with `.` and `..` resolved by name).
+    path: PathBuf,
+    /// Device and inode of an existing file (Unix), which also identify hard links.
+    id: Option<(u64, u64)>,
+}
+
+impl Resolved {
+    fn new(path: &Path) -> Self {
+        Resolved {
+            path: resolve(path),
+            id: file_id(path),
+        }
+    }
+
+    fn same_file(&self, other: &Resolved) -> bool {
+        self.path == other.path || (self.id.is_some() && self.id == other.id)
+    }
+}
+
+/// Canonical `path`, or (when it does not exist) its nearest existing ancestor canonical with
+/// the remaining components joined on.
+fn resolve(path: &Path) -> PathBuf {
+    if let Ok(canonical) = path.canonicalize() {
+        return canonical;
+    }
+    let absolute = std::path::absolute(path).unwrap_or_else(|_| path.to_owned());
+    let mut ancestor = absolute.as_path();
+    let mut rest = Vec::new();
+    loop {
+        if let Ok(canonical) = ancestor.canonicalize() {
+            return rest.iter().rev().fold(canonical, |mut p, c| {
+                push_component(&mut p, *c);
+                p
+            });
+        }
+        match (ancestor.parent(), ancestor.components().next_back()) {
+            (Some(parent), Some(last)) => {
+                rest.push(last);
+                ancestor = parent;
+            }
+            _ => return absolute,
+        }
+    }
+}
+
+/// Appends one component, resolving `.` and `..` by name (the path does not exist, so there
+/// is no link to follow).
+fn push_component(path: &mut PathBuf, component: Component<'_>) {
+    match component {
+        Component::CurDir => {}
+        Component::ParentDir => {
+            path.pop();
+        }
+        other => path.push(other),
+    }
+}
+
+#[cfg(unix)]
+fn file_id(path: &Path) -> Option<(u64, u64)> {
+    use std::os::unix::fs::MetadataExt;
+    std::fs::metadata(path).ok().map(|m| (m.dev(), m.ino()))
+}
+
+#[cfg(not(unix))]
+fn file_id(_path: &Path) -> Option<(u64, u64)> {
+    None
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn touch(path: &Path) {
+        std::fs::write(path, "x").unwrap();
+    }
+
+    #[test]
+    fn output_naming_an_input_is_refused_by_every_spelling() {
+        let dir = tempfile::tempdir().unwrap();
+        let input = dir.path().join("in.csv");
+        touch(&input);
+        std::fs::create_dir(dir.path().join("sub")).unwrap();
+        let spellings = [
+            input.clone(),
+            dir.path().join("sub/../in.csv"),
+            dir.path().join("./in.csv"),
+        ];
+        for out in &spellings {
+            let err = Files::new()
+                .input("--data", &input)
+                .output("--output", out)
+                .check()
+                .expect_err("refused");
+            assert!(err.to_string().contains("same file as --data"), "{err}");
+        }
+        #[cfg(unix)]
+        {
+            let link = dir.path().join("link.csv");
+            std::os::unix::fs::symlink(&input, &link).unwrap();
+            let hard = dir.path().join("hard.csv");
+            std::fs::hard_link(&input, &hard).unwrap();
+            let linked_dir = dir.path().join("linked");
+            std::os::unix::fs::symlink(dir.path(), &linked_dir).unwrap();
+            for out in [link, hard, linked_dir.join("in.csv")] {
+                assert!(
+                    Files::new()
+                        .input("--data", &input)
+                        .output("--output", &out)
+                        .check()
+                        .is_err(),
+                    "{} accepted",
+                    out.display()
+                );
+            }
+        }
+    }
+
+    #[test]
+    fn new_outputs_and_other_files_are_accepted() {
+        let dir = tempfile::tempdir().unwrap();
+        let input = dir.path().join("in.csv");
+        touch(&input);
+        for out in [
+            dir.path().join("out.csv"),
+            dir.path().join("missing/dir/in.csv"),
+            dir.path().join("in.csv.bak"),
+        ] {
+            Files::new()
+                .input("--data", &input)
+                .output("--output", &out)
+                .check()
+                .unwrap();
+        }
+    }
+
+    #[test]
+    fn directories_may_not_hold_inputs_and_outputs_may_not_clash() {
+        let dir = tempfile::tempdir().unwrap();
+        let input = dir.path().join("report/stage.toml");
+        std::fs::create_dir(dir.path().join("report")).unwrap();
+        touch(&input);
+        let err = Files::new()
+            .input("--stage", &input)
+            .output_directory("--out", &dir.path().join("report"))
+            .check()
+            .unwrap_err();
+        assert!(err.to_string().contains("holds the input --stage"), "{err}");
+        Files::new()
+            .input("--stage", &input)
+            .output_directory("--out", &dir.path().join("report2"))
+            .check()
+            .unwrap();
+        let a = dir.path().join("a.json");
+        let err = Files::new()
+            .output("--save-plant", &a)
+            .output("--save-inverse", &dir.path().join("./a.json"))
+            .check()
+            .unwrap_err();
+        assert!(err.to_string().contains("same place"), "{err}");
+    }
+}
