@@ -25,7 +25,7 @@ use files::NamesFiles;
 
 /// Feedforward hysteresis compensation for piezoelectric nanopositioners.
 #[derive(Debug, Parser)]
-#[command(name = "hystcomp", version, about, long_about = None)]
+#[command(name = "hystcomp", version = env!("HYSTCOMP_VERSION"), about, long_about = None)]
 struct Cli {
     /// Print results as JSON on stdout (for machines) instead of text.
     #[arg(long, global = true)]
