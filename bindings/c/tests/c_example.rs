@@ -215,6 +215,64 @@ fn readme_c_build_commands_work_from_the_repository_root() {
     assert!(String::from_utf8_lossy(&output.stdout).ends_with(" V -> 40.000000 um\n"));
 }
 
+/// The gcc line of the README's C build commands, split into words.
+fn readme_gcc_line() -> Vec<String> {
+    readme_c_commands()[1]
+        .split_whitespace()
+        .map(str::to_owned)
+        .collect()
+}
+
+#[test]
+fn makefile_links_the_library_the_readme_builds() {
+    assert!(available("make"), "make is needed (apt-get install make)");
+    // What `make -C examples/c` would do, without doing it (a release build takes minutes).
+    let output = run(
+        Command::new("make")
+            .args(["-n", "-C", "examples/c", "all"])
+            .env_remove("CARGO_TARGET_DIR")
+            .env_remove("PROFILE")
+            .current_dir(workspace_root()),
+        "make -n -C examples/c must print its commands",
+    );
+    let plan = String::from_utf8_lossy(&output.stdout);
+    let cargo_line = readme_c_commands()[0].clone();
+    assert!(plan.contains(&cargo_line), "{cargo_line:?} not in:\n{plan}");
+    let library = readme_gcc_line()
+        .into_iter()
+        .find(|w| w.ends_with("libhystcomp.a"))
+        .expect("the README's gcc line links libhystcomp.a");
+    let linked = workspace_root().join(&library);
+    assert!(
+        plan.contains(&linked.display().to_string()),
+        "the Makefile must link {library} as the README does:\n{plan}"
+    );
+}
+
+#[test]
+fn what_the_readme_c_steps_build_is_ignored_by_git() {
+    let gcc = readme_gcc_line();
+    let output_at = gcc.iter().position(|a| a == "-o").expect("gcc -o NAME");
+    // The README's executable (at the root) and the Makefile's (in examples/c).
+    let built = [
+        gcc[output_at + 1].clone(),
+        "examples/c/minimal".to_owned(),
+        "examples/c/round_trip".to_owned(),
+    ];
+    for path in built {
+        let ignored = Command::new("git")
+            .current_dir(workspace_root())
+            .args(["check-ignore", "-q", "--no-index", &path])
+            .status()
+            .expect("git runs");
+        if ignored.code() == Some(128) {
+            hystcomp_testkit::skip("not a git checkout: .gitignore not checked");
+            return;
+        }
+        assert!(ignored.success(), "{path} is not in .gitignore");
+    }
+}
+
 #[test]
 fn makefile_builds_and_runs_both_examples() {
     assert!(available("make"), "make is needed (apt-get install make)");
@@ -223,7 +281,7 @@ fn makefile_builds_and_runs_both_examples() {
     let _ = std::fs::remove_dir_all(&out);
     let output = run(
         Command::new("make")
-            .args(["-C", "examples/c", "run"])
+            .args(["-C", "examples/c", "run", "PROFILE=debug"])
             .arg(format!("OUT={}", out.display()))
             .env("CARGO_TARGET_DIR", target_dir())
             .current_dir(workspace_root()),
