@@ -6,7 +6,9 @@
 //! 2. `maturin develop` builds `bindings/python` and installs it into that environment, in the
 //!    outer build's target directory, so that it reuses what `cargo test` compiled (cargo
 //!    holds its lock while it builds, not while the test binaries run).
-//! 3. `python -m pytest bindings/python/tests -q`; a failure shows pytest's output.
+//! 3. `python -m pytest bindings/python/tests -q -rs`; a failure shows pytest's output, and
+//!    every test pytest skipped is recorded with its reason by `hystcomp_testkit::skip`, so
+//!    that CI lists it (cargo would count this one test as passed).
 //!
 //! `HYSTCOMP_PYTHON` names another interpreter than `python3` for creating the environment.
 
@@ -135,6 +137,7 @@ fn python_package_passes_pytest() {
             "pytest",
             "bindings/python/tests",
             "-q",
+            "-rs",
             "-p",
             "no:cacheprovider",
         ])
@@ -157,4 +160,34 @@ fn python_package_passes_pytest() {
         stdout.contains(" passed") && !stdout.contains(" failed"),
         "pytest ran no test:\n{report}"
     );
+    for reason in skipped_tests(&stdout) {
+        hystcomp_testkit::skip(format!("pytest: {reason}"));
+    }
+}
+
+/// The skips pytest's `-rs` summary lists (`SKIPPED [1] tests/test_x.py:12: reason`), each as
+/// `tests/test_x.py:12: reason`.
+fn skipped_tests(stdout: &str) -> Vec<String> {
+    stdout
+        .lines()
+        .filter_map(|line| line.strip_prefix("SKIPPED ["))
+        .filter_map(|rest| rest.split_once("] "))
+        .map(|(_, what)| what.trim().to_owned())
+        .collect()
+}
+
+#[test]
+fn pytest_skips_are_read_from_its_summary() {
+    let summary = "..s.\n=== short test summary info ===\n\
+        SKIPPED [1] bindings/python/tests/test_identify.py:103: the DBO data are not present\n\
+        SKIPPED [2] bindings/python/tests/test_x.py:7: no data\n\
+        40 passed, 3 skipped in 2.1s\n";
+    assert_eq!(
+        skipped_tests(summary),
+        [
+            "bindings/python/tests/test_identify.py:103: the DBO data are not present",
+            "bindings/python/tests/test_x.py:7: no data",
+        ]
+    );
+    assert!(skipped_tests("40 passed in 2.1s\n").is_empty());
 }
