@@ -21,6 +21,13 @@ pub enum DataError {
         /// What the operating system said.
         source: io::Error,
     },
+    /// The file is larger than [`MAX_FILE_BYTES`](super::MAX_FILE_BYTES).
+    TooLarge {
+        /// The file.
+        path: PathBuf,
+        /// Its size.
+        bytes: u64,
+    },
     /// The file could not be written.
     Write {
         /// The file.
@@ -239,6 +246,14 @@ impl fmt::Display for DataError {
                     _ => Ok(()),
                 }
             }
+            DataError::TooLarge { path, bytes } => write!(
+                f,
+                "{} is {} MiB, larger than the {} MiB a record may be; split it, or keep the \
+                 columns and rows you need",
+                path.display(),
+                bytes >> 20,
+                super::MAX_FILE_BYTES >> 20
+            ),
             // The source already reads "could not write PATH: reason".
             DataError::Write { source, .. } => write!(f, "{source}"),
             DataError::Empty { path } => write!(

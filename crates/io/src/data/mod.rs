@@ -34,7 +34,10 @@
 //!
 //! ## MATLAB Level-5 `.mat`
 //!
-//! Read with the `matfile` crate, uncompressed or compressed (`-v6`, `-v7`). A
+//! Read by our own bounded reader (`level5.rs`, from MathWorks' published format), uncompressed
+//! or compressed (`-v6`, `-v7`), either byte order. Every size in the file is checked before it
+//! is used, compressed variables decompress to at most [`MAX_MAT_BYTES`] in all, and a column
+//! holds at most [`MAX_MAT_VALUES`] values; the reader never panics and never prints. A
 //! [`Column::Name`] picks a real numeric variable holding a vector (any class: doubles,
 //! singles and integers are converted to `f64`); `name:k` picks column `k` (from 1) of a 2-D
 //! matrix, as MATLAB's `name(:, k)` (a vector, stored as a row or a column, is one column:
@@ -42,6 +45,9 @@
 //! and is refused when the file holds several. All selected columns
 //! must have the same length; the row range selects samples (elements) the same way it
 //! selects rows of a text file.
+//!
+//! Files larger than [`MAX_FILE_BYTES`] are refused before they are read, whatever their
+//! format; [`read_bytes`] reads contents already in memory.
 //!
 //! # Writing
 //!
@@ -57,6 +63,7 @@
 
 mod checks;
 mod error;
+mod level5;
 mod mat;
 mod text;
 mod write;
@@ -65,11 +72,16 @@ pub use checks::{
     check_finite, check_min_samples, check_not_constant, check_same_length, check_time_increasing,
 };
 pub use error::DataError;
+pub use level5::{MAX_MAT_BYTES, MAX_MAT_VALUES};
 pub use write::{write_csv, write_delimited};
 
 use std::fmt;
 use std::path::{Path, PathBuf};
 use std::str::FromStr;
+
+/// The largest file [`read_columns`] reads (2 GiB); a larger one is refused before it is
+/// read ([`DataError::TooLarge`]).
+pub const MAX_FILE_BYTES: u64 = 2 << 30;
 
 /// The 8-byte signature of an HDF5 file (MATLAB v7.3 files are HDF5 files).
 const HDF5_SIGNATURE: &[u8; 8] = b"\x89HDF\r\n\x1a\n";
@@ -391,7 +403,8 @@ impl Columns {
 /// Reads the selected columns of a delimited text file or a MATLAB Level-5 MAT-file (see the
 /// [module documentation](self) for the formats), refusing with a [`DataError`]:
 ///
-/// - a file that is missing or unreadable ([`DataError::Read`]), empty or without rows of data
+/// - a file that is missing or unreadable ([`DataError::Read`]), larger than
+///   [`MAX_FILE_BYTES`] ([`DataError::TooLarge`]), empty or without rows of data
 ///   ([`DataError::Empty`]), a MATLAB v7.3 file ([`DataError::MatV73`]) or another binary
 ///   format ([`DataError::UnsupportedFormat`], [`DataError::MatUnreadable`]);
 /// - an empty selection or `Column::Index(0)` ([`DataError::InvalidArgument`]);
@@ -427,6 +440,52 @@ pub fn read_columns(
     columns: &[Column],
     options: &ReadOptions,
 ) -> Result<Columns, DataError> {
+    check_selection(columns, options)?;
+    let read_error = |source| DataError::Read {
+        path: path.to_owned(),
+        source,
+    };
+    let size = std::fs::metadata(path).map_err(read_error)?.len();
+    if size > MAX_FILE_BYTES {
+        return Err(DataError::TooLarge {
+            path: path.to_owned(),
+            bytes: size,
+        });
+    }
+    let bytes = std::fs::read(path).map_err(read_error)?;
+    read_bytes(path, &bytes, columns, options)
+}
+
+/// [`read_columns`] on a file's contents already in memory: `path` only names the file in
+/// messages. The readers never touch the file system, print or panic, whatever the bytes
+/// (the fuzz targets call this directly).
+pub fn read_bytes(
+    path: &Path,
+    bytes: &[u8],
+    columns: &[Column],
+    options: &ReadOptions,
+) -> Result<Columns, DataError> {
+    check_selection(columns, options)?;
+    if bytes.is_empty() {
+        return Err(DataError::Empty {
+            path: path.to_owned(),
+        });
+    }
+    match detect_format(path, bytes) {
+        Format::MatLevel5 => mat::read_mat(path, bytes, columns, options),
+        Format::MatV73 => Err(DataError::MatV73 {
+            path: path.to_owned(),
+        }),
+        Format::Unsupported(reason) => Err(DataError::UnsupportedFormat {
+            path: path.to_owned(),
+            reason,
+        }),
+        Format::Text => text::read_text(path, bytes, columns, options),
+    }
+}
+
+/// Refuses an empty selection, column 0 and a backwards row range.
+fn check_selection(columns: &[Column], options: &ReadOptions) -> Result<(), DataError> {
     if columns.is_empty() {
         return Err(DataError::InvalidArgument {
             what: "columns",
@@ -444,26 +503,7 @@ pub fn read_columns(
     if let Some(rows) = &options.rows {
         rows.validate()?;
     }
-    let bytes = std::fs::read(path).map_err(|source| DataError::Read {
-        path: path.to_owned(),
-        source,
-    })?;
-    if bytes.is_empty() {
-        return Err(DataError::Empty {
-            path: path.to_owned(),
-        });
-    }
-    match detect_format(path, &bytes) {
-        Format::MatLevel5 => mat::read_mat(path, &bytes, columns, options),
-        Format::MatV73 => Err(DataError::MatV73 {
-            path: path.to_owned(),
-        }),
-        Format::Unsupported(reason) => Err(DataError::UnsupportedFormat {
-            path: path.to_owned(),
-            reason,
-        }),
-        Format::Text => text::read_text(path, &bytes, columns, options),
-    }
+    Ok(())
 }
 
 /// What a file is, judged from its first bytes and its extension.

@@ -1,0 +1,139 @@
+//! Tests of atomic writes: a reader or a crash sees the old file or the new one, never a
+//! part, and a failure leaves nothing behind.
+
+mod common;
+
+use common::*;
+
+use std::fs;
+
+use hystcomp_io::atomic::{write_atomic, write_atomic_with};
+use hystcomp_io::data::{DataError, write_csv};
+
+#[test]
+fn atomic_write_replaces_the_whole_file_and_leaves_nothing_else() {
+    let dir = dir();
+    let path = dir.path().join("model.json");
+    write_atomic(&path, b"a long first version of the file").expect("first write");
+    write_atomic(&path, b"short").expect("second write");
+    assert_eq!(fs::read(&path).expect("reading"), b"short");
+    assert_eq!(entries(dir.path()), ["model.json"]);
+}
+
+#[test]
+fn atomic_write_failing_midway_keeps_the_old_file_and_no_temporary() {
+    let dir = dir();
+    let path = dir.path().join("model.json");
+    fs::write(&path, "the old model").expect("the old file");
+    let error = write_atomic_with(&path, |out| {
+        out.write_all(&[b'x'; 100_000])?;
+        Err(std::io::Error::other("the encoder gave up"))
+    })
+    .expect_err("the writer fails");
+    assert_contains(&error.to_string(), &["model.json", "the encoder gave up"]);
+    assert_eq!(fs::read_to_string(&path).expect("kept"), "the old model");
+    assert_eq!(entries(dir.path()), ["model.json"]);
+
+    write_atomic_with(&path, |out| out.write_all(b"the new model")).expect("writing");
+    assert_eq!(
+        fs::read_to_string(&path).expect("replaced"),
+        "the new model"
+    );
+    assert_eq!(entries(dir.path()), ["model.json"]);
+}
+
+#[test]
+fn atomic_write_onto_a_directory_fails_and_leaves_it_intact() {
+    let dir = dir();
+    let target = dir.path().join("results");
+    fs::create_dir(&target).expect("a directory");
+    fs::write(target.join("inside.txt"), "keep").expect("a file inside");
+    let error = write_atomic(&target, b"new").expect_err("a directory is not a file");
+    assert_eq!(error.kind(), std::io::ErrorKind::IsADirectory);
+    assert!(error.to_string().contains("results"), "{error}");
+    assert_eq!(
+        fs::read_to_string(target.join("inside.txt")).expect("kept"),
+        "keep"
+    );
+    assert_eq!(entries(dir.path()), ["results"]);
+    assert_eq!(entries(&target), ["inside.txt"]);
+
+    let error = write_csv(&target, &["u"], &[&[1.0]]).expect_err("through write_csv");
+    assert!(matches!(error, DataError::Write { .. }) && error.is_output());
+    assert_contains(&error.to_string(), &["results"]);
+    assert_eq!(entries(dir.path()), ["results"]);
+}
+
+#[test]
+fn atomic_write_into_a_missing_directory_names_the_path() {
+    let dir = dir();
+    let path = dir.path().join("missing").join("out.csv");
+    let error = write_atomic(&path, b"x").expect_err("no directory");
+    assert_eq!(error.kind(), std::io::ErrorKind::NotFound);
+    assert!(error.to_string().contains("out.csv"), "{error}");
+    assert_eq!(entries(dir.path()), Vec::<String>::new());
+}
+
+#[cfg(unix)]
+#[test]
+fn atomic_write_in_a_read_only_directory_keeps_the_old_file() {
+    use std::os::unix::fs::PermissionsExt;
+    let dir = dir();
+    let locked = dir.path().join("locked");
+    fs::create_dir(&locked).expect("a directory");
+    let path = locked.join("model.json");
+    fs::write(&path, "old").expect("the old file");
+    fs::set_permissions(&locked, fs::Permissions::from_mode(0o555)).expect("read-only");
+    // A user who may write anyway (root) cannot test this: probe first.
+    let probe = locked.join("probe");
+    let writable = fs::write(&probe, "").is_ok();
+    if writable {
+        fs::remove_file(&probe).expect("removing the probe");
+        fs::set_permissions(&locked, fs::Permissions::from_mode(0o755)).expect("restore");
+        hystcomp_testkit::skip("this user can write into read-only directories (root?)");
+        return;
+    }
+    let result = write_atomic(&path, b"new");
+    fs::set_permissions(&locked, fs::Permissions::from_mode(0o755)).expect("restore");
+    let error = result.expect_err("a read-only directory");
+    assert!(error.to_string().contains("model.json"), "{error}");
+    assert_eq!(fs::read_to_string(&path).expect("the old file"), "old");
+    assert_eq!(entries(&locked), ["model.json"]);
+}
+
+#[cfg(unix)]
+#[test]
+fn atomic_write_keeps_permissions_and_symbolic_links() {
+    use std::os::unix::fs::PermissionsExt;
+    let dir = dir();
+    let path = dir.path().join("data.csv");
+    fs::write(&path, "old").expect("the old file");
+    fs::set_permissions(&path, fs::Permissions::from_mode(0o640)).expect("permissions");
+    write_atomic(&path, b"new").expect("writing");
+    let mode = fs::metadata(&path).expect("metadata").permissions().mode() & 0o777;
+    assert_eq!(mode, 0o640);
+
+    let link = dir.path().join("latest.csv");
+    std::os::unix::fs::symlink("data.csv", &link).expect("a link");
+    write_atomic(&link, b"through the link").expect("writing through a link");
+    assert!(
+        fs::symlink_metadata(&link)
+            .expect("link")
+            .file_type()
+            .is_symlink()
+    );
+    assert_eq!(fs::read(&path).expect("reading"), b"through the link");
+    assert_eq!(entries(dir.path()), ["data.csv", "latest.csv"]);
+}
+
+#[test]
+fn a_failed_write_names_the_path_once_and_leaves_nothing() {
+    let d = dir();
+    let path = d.path().join("missing-folder").join("out.csv");
+    let error = write_csv(&path, &["a"], &[&[1.0, 2.0]]).unwrap_err();
+    let message = error.to_string();
+    let shown = path.display().to_string();
+    assert_eq!(message.matches(&shown).count(), 1, "{message}");
+    assert!(matches!(error, DataError::Write { .. }), "{error:?}");
+    assert!(entries(d.path()).is_empty(), "{:?}", entries(d.path()));
+}
