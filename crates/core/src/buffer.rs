@@ -7,7 +7,8 @@ use crate::CoreError;
 /// Implemented for `[T; N]` (no allocator needed: the length is fixed at `N`) and, with the
 /// `alloc` feature, for `Vec<T>` (any length).
 pub trait Buffer<T: Copy>: AsRef<[T]> + AsMut<[T]> + Clone {
-    /// The only length this storage can hold (`Some(N)` for `[T; N]`), or `None` for any length.
+    /// The largest length this storage can hold (`Some(N)` for `[T; N]`, which holds exactly
+    /// `N`, and for [`Bounded<T, N>`], which holds up to `N`), or `None` for any length.
     const CAPACITY: Option<usize>;
 
     /// A buffer of `len` copies of `value`, or `None` when this storage cannot hold exactly
@@ -21,6 +22,40 @@ impl<T: Copy, const N: usize> Buffer<T> for [T; N] {
     #[inline]
     fn filled(value: T, len: usize) -> Option<Self> {
         (len == N).then_some([value; N])
+    }
+}
+
+/// Up to `N` values in a fixed array, without an allocator: storage for the chain's links,
+/// whose arrays (creep elements, filter coefficients, the preview) have different lengths.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Bounded<T, const N: usize> {
+    data: [T; N],
+    len: usize,
+}
+
+impl<T, const N: usize> AsRef<[T]> for Bounded<T, N> {
+    #[inline]
+    fn as_ref(&self) -> &[T] {
+        &self.data[..self.len]
+    }
+}
+
+impl<T, const N: usize> AsMut<[T]> for Bounded<T, N> {
+    #[inline]
+    fn as_mut(&mut self) -> &mut [T] {
+        &mut self.data[..self.len]
+    }
+}
+
+impl<T: Copy, const N: usize> Buffer<T> for Bounded<T, N> {
+    const CAPACITY: Option<usize> = Some(N);
+
+    #[inline]
+    fn filled(value: T, len: usize) -> Option<Self> {
+        (len <= N).then_some(Bounded {
+            data: [value; N],
+            len,
+        })
     }
 }
 

@@ -88,6 +88,47 @@ pub enum CoreError {
         /// The value of `a2`.
         a2: f64,
     },
+    /// More entries than the core accepts (creep elements, filter order, delay).
+    TooLarge {
+        /// What, e.g. `"creep elements"`.
+        what: &'static str,
+        /// How many were given.
+        found: usize,
+        /// The most accepted.
+        max: usize,
+    },
+    /// A parameter that must be positive is not (a time constant, the sample period).
+    NotPositive {
+        /// Which parameter.
+        what: &'static str,
+        /// Its index when it is one entry of an array.
+        index: Option<usize>,
+        /// Its value.
+        value: f64,
+    },
+    /// The creep link's weights sum (in absolute value) to 1 or more: its forward link could
+    /// be unstable (see `Creep`).
+    CreepUnstable {
+        /// `sum |c_i|`.
+        weight_sum: f64,
+    },
+    /// The vibration link is unusable: the reason says why.
+    VibrationModel {
+        /// What is wrong.
+        reason: &'static str,
+        /// The value concerned (gain, magnitude...).
+        value: f64,
+    },
+    /// The preview is too short for the vibration inverse, or too long.
+    Preview {
+        /// The preview asked for, samples.
+        preview: usize,
+        /// The shortest that inverts the model (its delay plus its zeros outside the unit
+        /// circle).
+        minimum: usize,
+        /// The longest accepted.
+        maximum: usize,
+    },
 }
 
 impl fmt::Display for CoreError {
@@ -168,6 +209,37 @@ impl fmt::Display for CoreError {
             CoreError::NonPositiveA2 { a2 } => {
                 write!(f, "WIHC divides by a2 (eq. (9)) but a2 = {a2} is not > 0")
             }
+            CoreError::TooLarge { what, found, max } => {
+                write!(f, "{found} {what} given; at most {max} are accepted")
+            }
+            CoreError::NotPositive {
+                what,
+                index: Some(i),
+                value,
+            } => write!(f, "{what}[{i}] = {value} must be positive and finite"),
+            CoreError::NotPositive {
+                what,
+                index: None,
+                value,
+            } => write!(f, "{what} = {value} must be positive and finite"),
+            CoreError::CreepUnstable { weight_sum } => write!(
+                f,
+                "the creep weights sum to {weight_sum:.6} in absolute value; below 1 is needed \
+                 for the creep link to be stable"
+            ),
+            CoreError::VibrationModel { reason, value } => {
+                write!(f, "the vibration model is refused: {reason} ({value})")
+            }
+            CoreError::Preview {
+                preview,
+                minimum,
+                maximum,
+            } => write!(
+                f,
+                "a preview of {preview} samples cannot invert this vibration model: between \
+                 {minimum} (its delay plus its zeros outside the unit circle) and {maximum} \
+                 are needed"
+            ),
         }
     }
 }

@@ -45,7 +45,9 @@
 extern crate alloc;
 
 mod buffer;
+mod chain;
 mod compensator;
+mod creep;
 mod dihc;
 mod error;
 mod ihc;
@@ -54,12 +56,16 @@ mod mpim;
 pub mod paper;
 mod play;
 mod real;
+mod roots;
 mod solve;
+mod vibration;
 mod walk;
 mod wihc;
 
-pub use buffer::Buffer;
+pub use buffer::{Bounded, Buffer};
+pub use chain::{ChainCompensator, ChainModel};
 pub use compensator::{Compensator, Diagnostics, OutputLimits, SolveMode};
+pub use creep::{Creep, CreepInverse, MAX_CREEP_ELEMENTS};
 pub use dihc::Dihc;
 pub use error::CoreError;
 pub use ihc::Ihc;
@@ -67,6 +73,10 @@ pub use invertibility::{BranchSlope, LoopGain, branch_checkpoints};
 pub use mpim::Mpim;
 pub use play::{OneSidedPlay, SymmetricPlay};
 pub use real::Real;
+pub use vibration::{
+    MAX_DELAY_SAMPLES, MAX_PREVIEW_SAMPLES, MAX_VIBRATION_ORDER, STATIC_GAIN_TOLERANCE,
+    TAIL_TOLERANCE, Vibration, VibrationInverse,
+};
 pub use wihc::Wihc;
 
 /// The Rust examples of the README, run as doctests so that they stay true.
