@@ -11,13 +11,15 @@
 
 pub mod excitation;
 pub mod figures;
-pub mod indices;
 pub mod reference;
 pub mod report;
 pub mod signals;
 pub mod study;
 pub mod study_report;
 pub mod trajectory;
+
+/// The tracking indices of section 4.3 (the crate `hystcomp-indices`, re-exported).
+pub use hystcomp_indices as indices;
 
 pub use indices::{IndexError, TrackingIndices};
 pub use reference::Reference;

@@ -1,6 +1,12 @@
 //! Tracking indices of section 4.3: the maximum error e_m (D1, corrected as in ERRATA item 2),
 //! the RMS error e_rms (D2) and the maximum hysteresis error e_mhe (eq. (12), made precise as in
 //! ERRATA item 6). All three are in percent of the desired range `max y_d - min y_d`.
+//!
+//! G.-Y. Gu and L.-M. Zhu, *Smart Mater. Struct.* **23** (2014) 095029,
+//! doi:10.1088/0964-1726/23/9/095029. A crate of its own (serde its only dependency) so that
+//! the C library and the bindings over it compute the indices without the study's plotting
+//! and simulation; `hystcomp_experiments::indices` re-exports it.
+#![warn(missing_docs)]
 
 use core::fmt;
 
