@@ -112,9 +112,31 @@ fn bench_type<T: Real>(c: &mut Criterion, type_name: &str) {
     group.finish();
 }
 
+/// The set-up cost of each compensator (invertibility check, eq. (7)'s inverse, loop gains)
+/// for large models: linear in the number of operators.
+fn bench_set_up(c: &mut Criterion) {
+    let mut group = c.benchmark_group("set_up_f64");
+    let limits = OutputLimits::new(0.0, 1.0).unwrap();
+    for n in [1_000usize, 10_000] {
+        let model = plant::<f64>(n);
+        let inverse_model = inverse::<f64>(n);
+        group.bench_with_input(BenchmarkId::new("ihc_new", n), &n, |b, _| {
+            b.iter(|| Ihc::<f64, Vec<f64>>::new(black_box(&model), limits, SolveMode::Exact))
+        });
+        group.bench_with_input(BenchmarkId::new("wihc_new", n), &n, |b, _| {
+            b.iter(|| Wihc::<f64, Vec<f64>>::new(black_box(&model), limits, SolveMode::Exact))
+        });
+        group.bench_with_input(BenchmarkId::new("dihc_new", n), &n, |b, _| {
+            b.iter(|| Dihc::<f64, Vec<f64>>::new(black_box(&inverse_model), 0.0, 1.0, limits))
+        });
+    }
+    group.finish();
+}
+
 fn benches(c: &mut Criterion) {
     bench_type::<f64>(c, "f64");
     bench_type::<f32>(c, "f32");
+    bench_set_up(c);
 }
 
 criterion_group!(compensators, benches);

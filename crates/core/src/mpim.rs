@@ -260,35 +260,54 @@ impl<T: Real, B: Buffer<T>> Mpim<T, B> {
         let r = self.thresholds();
         let b = self.weights();
         let always = r.iter().take_while(|r| **r <= T::zero()).count();
-        // slope[k] = a2 + b_1 + ... + b_k, the slope of P1 with the first k operators moving.
-        let slope = |k: usize| b[..k].iter().fold(self.a2, |s, &bi| s + bi);
-        for k in always..=n {
-            let s = slope(k);
-            if s.is_nan() || s <= T::zero() {
-                return Err(CoreError::PiPartNotInvertible {
-                    active_operators: k,
-                    slope: s.to_f64(),
-                });
+        // slope(k) = a2 + b_1 + ... + b_k, the slope of P1 with the first k operators moving,
+        // summed in one pass (linear set-up cost for models of many operators).
+        let mut literal = true;
+        let mut slope = self.a2;
+        let mut slope_always = self.a2;
+        for k in 0..=n {
+            if k == always {
+                slope_always = slope;
+            }
+            if k >= always {
+                if slope.is_nan() || slope <= T::zero() {
+                    return Err(CoreError::PiPartNotInvertible {
+                        active_operators: k,
+                        slope: slope.to_f64(),
+                    });
+                }
+            } else {
+                literal = literal && slope > T::zero();
+            }
+            if let Some(&bk) = b.get(k) {
+                slope = slope + bk;
             }
         }
-        let literal = (0..always).all(|k| slope(k) > T::zero());
         let mut r_hat: B = filled(T::zero(), n)?;
         let mut b_hat: B = filled(T::zero(), n)?;
+        // r_hat_j = a2 r_j + sum_{i<j} b_i (r_j - r_i), computed as r_hat_0 = a2 r_0 and
+        // r_hat_j = r_hat_{j-1} + slope(j) (r_j - r_{j-1}) (the same sum, term by term).
+        let mut before = self.a2; // slope(j)
         for j in 0..n {
-            // r_hat_j = a2 r_j + sum_{i<j} b_i (r_j - r_i)
-            r_hat.as_mut()[j] = (0..j).fold(self.a2 * r[j], |acc, i| acc + b[i] * (r[j] - r[i]));
+            let after = before + b[j]; // slope(j + 1)
+            r_hat.as_mut()[j] = if j == 0 {
+                self.a2 * r[0]
+            } else {
+                r_hat.as_ref()[j - 1] + before * (r[j] - r[j - 1])
+            };
             b_hat.as_mut()[j] = if literal || j >= always {
                 // -b_j / (s_{j-1} s_j) = 1/s_j - 1/s_{j-1} (0-based: slopes j and j + 1).
                 // Otherwise the zero-threshold operators are folded into a2_hat below.
-                T::one() / slope(j + 1) - T::one() / slope(j)
+                T::one() / after - T::one() / before
             } else {
                 T::zero()
             };
+            before = after;
         }
         let a2_hat = if literal {
             T::one() / self.a2
         } else {
-            T::one() / slope(always)
+            T::one() / slope_always
         };
         let inverse = Mpim {
             thresholds: r_hat,
