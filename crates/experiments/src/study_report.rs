@@ -593,6 +593,7 @@ pub fn explanations(study: &Study) -> Vec<TextSection> {
     sections.push(TextSection {
         heading: "Why the pipelines differ (measured)".into(),
         paragraphs,
+        ..Default::default()
     });
 
     let mut limits = Vec::new();
@@ -678,6 +679,7 @@ pub fn explanations(study: &Study) -> Vec<TextSection> {
     sections.push(TextSection {
         heading: "What limits the exact pipeline (measured)".into(),
         paragraphs: limits,
+        ..Default::default()
     });
 
     let e = &study.options.excitation;
@@ -707,6 +709,7 @@ pub fn explanations(study: &Study) -> Vec<TextSection> {
                 study.feedforward_gain_v_per_um, study.stroke_um, e.full_scale_v,
             ),
         ],
+        ..Default::default()
     });
     sections
 }

@@ -163,6 +163,7 @@ fn report_data(figures: Vec<FigureEntry>) -> ReportData {
             paragraphs: vec![
                 "Synthetic text. <script>document.body.innerHTML = 'owned'</script>".to_string(),
             ],
+            ..Default::default()
         }],
         stage_config_toml: "[amplifier]\ngain = 15.0\nrange_v = [0.0, 150.0]\n".to_string(),
     }
