@@ -40,6 +40,23 @@ use crate::atomic::write_atomic;
 /// The only `format_version` this crate reads and writes.
 pub const FORMAT_VERSION: u32 = 1;
 
+/// The most play operators a model file may hold (10 000): compensators build in time linear
+/// in the operators and step in time linear in them (about 25 us per sample at 10 000), so
+/// larger files are refused before a model is built.
+pub const MAX_OPERATORS: usize = 10_000;
+
+/// The largest model file read (16 MiB; a model of [`MAX_OPERATORS`] operators takes about
+/// 0.5 MiB): a larger file is refused before it is read.
+pub const MAX_MODEL_FILE_BYTES: u64 = 16 << 20;
+
+/// The smallest and largest `scale` of an input or output (`1e-12` to `1e12` physical units per
+/// normalised unit): beyond them, normalising a physical value loses it (a subnormal scale
+/// turned every desired position into the same drive) or overflows.
+pub const SCALE_RANGE: [f64; 2] = [1e-12, 1e12];
+
+/// The largest magnitude of an `offset` (`1e15`, as for the values of a record).
+pub const MAX_OFFSET: f64 = 1e15;
+
 /// What a model maps.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "lowercase")]
@@ -198,6 +215,23 @@ impl From<CoreError> for ModelFileError {
     }
 }
 
+/// The non-finite token (`NaN`, `Infinity`, `-Infinity`) where serde_json stopped, if that is
+/// what stopped it.
+fn non_json_number(text: &str, error: &serde_json::Error) -> Option<&'static str> {
+    if !error.is_syntax() {
+        return None;
+    }
+    let line = text.lines().nth(error.line().checked_sub(1)?)?;
+    // serde_json's column is 1-based and points at (or just past) the offending character.
+    let start = error.column().saturating_sub(1).min(line.len());
+    let rest = line.get(start.saturating_sub(1)..).unwrap_or("");
+    let rest =
+        rest.trim_start_matches(|c: char| c == ':' || c == ',' || c == '[' || c.is_whitespace());
+    ["-Infinity", "Infinity", "NaN", "-NaN"]
+        .into_iter()
+        .find(|token| rest.starts_with(token))
+}
+
 impl ModelFile {
     /// A validated model file (see [`ModelFile::validate`]).
     #[allow(clippy::too_many_arguments)]
@@ -248,8 +282,9 @@ impl ModelFile {
         )
     }
 
-    /// Checks the version, the scales (finite, `scale > 0`, units named), the input range
-    /// (finite, `lo < hi`) and the MPIM parameters (see [`Mpim::new`]). Invertibility is
+    /// Checks the version, the scales (finite, `scale` in [`SCALE_RANGE`], `|offset|` at most
+    /// [`MAX_OFFSET`], units named), the input range (finite, `lo < hi`), the number of
+    /// operators (at most [`MAX_OPERATORS`]) and the MPIM parameters (see [`Mpim::new`]). Invertibility is
     /// checked where the model is used (a compensator), with the limits it is used with.
     pub fn validate(&self) -> Result<(), ModelFileError> {
         if self.format_version != FORMAT_VERSION {
@@ -268,6 +303,18 @@ impl ModelFile {
                     ),
                 });
             }
+            let [lo, hi] = SCALE_RANGE;
+            if !(lo..=hi).contains(&s.scale) || s.offset.abs() > MAX_OFFSET {
+                return Err(ModelFileError::Invalid {
+                    message: format!(
+                        "{name}.scale must lie in [{lo:e}, {hi:e}] and |{name}.offset| be at \
+                         most {MAX_OFFSET:e} (got offset {}, scale {}): normalising with such \
+                         a scale loses or overflows every value; express the {name} in a unit \
+                         of everyday size",
+                        s.offset, s.scale
+                    ),
+                });
+            }
             if s.unit.trim().is_empty() {
                 return Err(ModelFileError::Invalid {
                     message: format!("{name}.unit is empty; name the unit, e.g. \"V\" or \"um\""),
@@ -279,6 +326,15 @@ impl ModelFile {
             return Err(ModelFileError::Invalid {
                 message: format!(
                     "input_range [{lo}, {hi}] must be finite and increasing (normalised units)"
+                ),
+            });
+        }
+        if self.thresholds.len() > MAX_OPERATORS {
+            return Err(ModelFileError::Invalid {
+                message: format!(
+                    "thresholds holds {} play operators, more than the {MAX_OPERATORS} a model \
+                     file may hold; identify a model with fewer operators",
+                    self.thresholds.len()
                 ),
             });
         }
@@ -299,10 +355,22 @@ impl ModelFile {
     /// Reads and validates a model file.
     pub fn load(path: &Path) -> Result<Self, ModelFileError> {
         let shown = path.display().to_string();
-        let text = std::fs::read_to_string(path).map_err(|source| ModelFileError::Io {
+        let io_error = |source| ModelFileError::Io {
             path: shown.clone(),
             source,
-        })?;
+        };
+        let size = std::fs::metadata(path).map_err(io_error)?.len();
+        if size > MAX_MODEL_FILE_BYTES {
+            return Err(ModelFileError::Invalid {
+                message: format!(
+                    "{shown} is {} MiB, larger than the {} MiB a model file may be (a model of \
+                     {MAX_OPERATORS} operators takes about 0.5 MiB); is it a model file?",
+                    size >> 20,
+                    MAX_MODEL_FILE_BYTES >> 20
+                ),
+            });
+        }
+        let text = std::fs::read_to_string(path).map_err(io_error)?;
         Self::from_json(&text).map_err(|e| match e {
             ModelFileError::Parse { message, .. } => ModelFileError::Parse {
                 path: shown,
@@ -325,7 +393,16 @@ impl ModelFile {
         let value: serde_json::Value =
             serde_json::from_str(text).map_err(|e| ModelFileError::Parse {
                 path: String::new(),
-                message: e.to_string(),
+                message: match non_json_number(text, &e) {
+                    Some(token) => format!(
+                        "{e}: the value there is a bare {token}, which JSON has no word for \
+                         (Python's json.dump writes it for float('{}')); a model's \
+                         parameters and scales must be finite numbers: re-identify the model, \
+                         or replace {token} with a number",
+                        if token.contains("NaN") { "nan" } else { "inf" }
+                    ),
+                    None => e.to_string(),
+                },
             })?;
         match value.get("format_version").and_then(|v| v.as_u64()) {
             Some(v) if v == u64::from(FORMAT_VERSION) => {}

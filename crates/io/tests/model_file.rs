@@ -201,3 +201,169 @@ fn a_directory_or_a_missing_folder_is_refused_naming_the_path_once() {
     assert_eq!(occurrences(&err, &shown), 1, "{err}");
     assert!(err.contains("directory"), "{err}");
 }
+
+/// Issue 13 item 8: a saved model reloads bit for bit (serde_json's `float_roundtrip`): random
+/// parameters and scales of every magnitude a model file accepts, through `to_json` and
+/// `from_json` and through a file.
+mod round_trip {
+    use super::*;
+    use proptest::prelude::*;
+    use proptest::test_runner::{Config, RngSeed};
+
+    /// Any normal or zero f64 within `[-bound, bound]`, with every mantissa pattern.
+    fn within(bound: f64) -> impl Strategy<Value = f64> {
+        (prop::num::f64::NORMAL | prop::num::f64::ZERO).prop_map(move |x| {
+            if x.abs() <= bound {
+                x
+            } else {
+                // Keep the mantissa, move the exponent into range.
+                let scaled =
+                    x / 2f64.powi(x.abs().log2().ceil() as i32 - bound.log2().floor() as i32);
+                scaled.clamp(-bound, bound)
+            }
+        })
+    }
+
+    fn model() -> impl Strategy<Value = ModelFile> {
+        (1usize..30).prop_flat_map(|n| {
+            (
+                prop::collection::vec(within(1.0).prop_map(f64::abs), n),
+                prop::collection::vec(within(0.01), n),
+                within(0.05),
+                (0.5f64..2.0, within(1.0)).prop_map(|(a, b)| a + b.abs()),
+                (within(1e6), 1e-3f64..1e6),
+                (within(1e6), 1e-3f64..1e6),
+            )
+                .prop_map(|(mut r, b, a1, a2, (oi, si), (oo, so))| {
+                    r.sort_by(f64::total_cmp);
+                    r.dedup();
+                    r[0] = 0.0;
+                    let n = r.len();
+                    let s = |unit: &str, offset, scale| Scale {
+                        quantity: unit.into(),
+                        unit: unit.into(),
+                        offset,
+                        scale,
+                    };
+                    ModelFile::new(
+                        Direction::Plant,
+                        s("V", oi, si),
+                        s("um", oo, so),
+                        [0.0, 1.0],
+                        r,
+                        b[..n].to_vec(),
+                        a1,
+                        a2,
+                    )
+                    .expect("a valid random model")
+                })
+        })
+    }
+
+    fn bits(file: &ModelFile) -> Vec<u64> {
+        let mut all = vec![
+            file.input.offset,
+            file.input.scale,
+            file.output.offset,
+            file.output.scale,
+            file.a1,
+            file.a2,
+        ];
+        all.extend(&file.thresholds);
+        all.extend(&file.weights);
+        all.iter().map(|x| x.to_bits()).collect()
+    }
+
+    proptest! {
+        #![proptest_config(Config {
+            cases: 256,
+            rng_seed: RngSeed::Fixed(0x726f_756e_6474_7269),
+            failure_persistence: None,
+            ..Config::default()
+        })]
+
+        #[test]
+        fn a_saved_model_reloads_bit_for_bit(file in model()) {
+            let back = ModelFile::from_json(&file.to_json()).unwrap();
+            prop_assert_eq!(bits(&back), bits(&file));
+        }
+    }
+
+    #[test]
+    fn through_a_file_too() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("m.json");
+        let mut runner = proptest::test_runner::TestRunner::new(Config {
+            rng_seed: RngSeed::Fixed(7),
+            ..Config::default()
+        });
+        for _ in 0..20 {
+            let file =
+                proptest::strategy::ValueTree::current(&model().new_tree(&mut runner).unwrap());
+            file.save(&path).unwrap();
+            assert_eq!(bits(&ModelFile::load(&path).unwrap()), bits(&file));
+        }
+    }
+}
+
+/// Python's `json.dump` writes `NaN`, `Infinity` and `-Infinity` for non-finite floats: the
+/// message says what the token is and what to do, with the line.
+#[test]
+fn a_bare_nan_token_is_named() {
+    let text = std::fs::read_to_string(example("table1-plant.json")).unwrap();
+    for (token, python) in [("NaN", "nan"), ("Infinity", "inf"), ("-Infinity", "inf")] {
+        let edited = text.replacen("\"a1\": -0.1569", &format!("\"a1\": {token}"), 1);
+        assert_ne!(edited, text, "the example's a1 line");
+        let err = ModelFile::from_json(&edited).unwrap_err().to_string();
+        for fragment in [
+            format!("bare {token}"),
+            "json.dump".to_owned(),
+            format!("float('{python}')"),
+            "line ".to_owned(),
+        ] {
+            assert!(err.contains(&fragment), "{fragment:?} not in {err}");
+        }
+        let in_list = text.replacen("0.2313", token, 1);
+        let err = ModelFile::from_json(&in_list).unwrap_err().to_string();
+        assert!(err.contains(&format!("bare {token}")), "{err}");
+    }
+    // Other syntax errors keep serde_json's own message.
+    let err = ModelFile::from_json("{ \"a1\": nope }")
+        .unwrap_err()
+        .to_string();
+    assert!(!err.contains("bare"), "{err}");
+}
+
+/// Sizes and scales a model file may not have (issue 13 items 3 and 5): too many operators,
+/// scales that lose or overflow every value, a file too large to be a model.
+#[test]
+fn sizes_and_scales_are_bounded() {
+    use hystcomp_io::model_file::{MAX_MODEL_FILE_BYTES, MAX_OPERATORS};
+    let many = refusal(|v| {
+        let n = MAX_OPERATORS + 1;
+        v["thresholds"] = (0..n)
+            .map(|i| i as f64 / n as f64)
+            .collect::<Vec<_>>()
+            .into();
+        v["weights"] = vec![1e-6; n].into();
+    });
+    assert!(
+        many.contains("10001 play operators") && many.contains("10000"),
+        "{many}"
+    );
+    for (field, value, fragment) in [
+        ("scale", 5e-324, "output.scale must lie in [1e-12, 1e12]"),
+        ("scale", 1e-13, "output.scale"),
+        ("scale", 1e13, "output.scale"),
+        ("offset", 1e16, "|output.offset|"),
+    ] {
+        let err = refusal(|v| v["output"][field] = value.into());
+        assert!(err.contains(fragment), "{field} {value}: {err}");
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let big = dir.path().join("big.json");
+    let file = std::fs::File::create(&big).unwrap();
+    file.set_len(MAX_MODEL_FILE_BYTES + 1).unwrap();
+    let err = ModelFile::load(&big).unwrap_err().to_string();
+    assert!(err.contains("big.json") && err.contains("16 MiB"), "{err}");
+}
