@@ -193,10 +193,10 @@ def test_missing_unreadable_and_invalid_files_raise_with_the_path(tmp_path):
     with pytest.raises(hystcomp.ModelFileError, match="not a valid hystcomp model file"):
         hystcomp.ModelFile.load(garbage)
     future = json.loads(TABLE1_FILE.read_text())
-    future["format_version"] = 2
+    future["format_version"] = 3
     newer = tmp_path / "newer.json"
     newer.write_text(json.dumps(future))
-    with pytest.raises(hystcomp.ModelFileError, match="format_version 2"):
+    with pytest.raises(hystcomp.ModelFileError, match="format_version 3"):
         hystcomp.ModelFile.load(newer)
     with pytest.raises(OSError):
         hystcomp.ModelFile.load(TABLE1_FILE).save(tmp_path / "no" / "such" / "dir" / "m.json")

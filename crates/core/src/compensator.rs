@@ -194,3 +194,28 @@ impl<T: Real> OutputGuard<T> {
         out
     }
 }
+
+/// A boxed compensator is one (so that a chain can hold any of them behind `dyn`).
+#[cfg(feature = "alloc")]
+impl<T: Real, C: Compensator<T> + ?Sized> Compensator<T> for alloc::boxed::Box<C> {
+    fn reset(&mut self) {
+        (**self).reset()
+    }
+
+    #[inline]
+    fn step(&mut self, desired: T) -> T {
+        (**self).step(desired)
+    }
+
+    fn process(&mut self, desired: &[T], control: &mut [T]) -> Result<(), CoreError> {
+        (**self).process(desired, control)
+    }
+
+    fn limits(&self) -> OutputLimits<T> {
+        (**self).limits()
+    }
+
+    fn diagnostics(&self) -> Diagnostics {
+        (**self).diagnostics()
+    }
+}

@@ -6,7 +6,8 @@ use std::fmt;
 use std::str::FromStr;
 
 use hystcomp_core::{
-    Compensator, CoreError, Diagnostics, Dihc, Ihc, Mpim, OutputLimits, SolveMode, Wihc,
+    ChainCompensator, Compensator, CoreError, Diagnostics, Dihc, Ihc, Mpim, OutputLimits,
+    SolveMode, Wihc,
 };
 use serde::{Deserialize, Serialize};
 
@@ -172,6 +173,9 @@ pub struct ScaledCompensator {
     delayed_loop_gain: Option<f64>,
     /// DIHC: the desired positions the inverse model accepts, physical units.
     desired_range: Option<(f64, f64)>,
+    /// The vibration inverse's preview, samples (0 without a vibration link): `step`'s output
+    /// lags its input by it.
+    preview: usize,
 }
 
 impl fmt::Debug for ScaledCompensator {
@@ -189,10 +193,27 @@ impl ScaledCompensator {
     /// Builds `method` from `model`. `limits` are the drive limits in the model's voltage unit;
     /// without them, the voltage range the model was identified on (a plant model's
     /// `input_range`; an inverse model's normalised output range [0, 1]).
+    ///
+    /// A model with creep or vibration links (format version 2) gives the chain inverted in
+    /// reverse order (`hystcomp_core::ChainCompensator`): the vibration inverse with the
+    /// preview an offline inversion needs ([`ScaledCompensator::with_preview`] chooses
+    /// another), the creep inverse, then `method`. It runs at the model's `sample_rate_hz`.
     pub fn new(
         model: &ModelFile,
         method: Method,
         limits: Option<(f64, f64)>,
+    ) -> Result<Self, CompensatorError> {
+        Self::with_preview(model, method, limits, None)
+    }
+
+    /// As [`ScaledCompensator::new`], with the vibration inverse's preview `preview` samples
+    /// (`None`: the preview for a negligible cut of its anti-causal series; ignored without a
+    /// vibration link). Streaming, `step`'s output then lags its input by the preview.
+    pub fn with_preview(
+        model: &ModelFile,
+        method: Method,
+        limits: Option<(f64, f64)>,
+        preview: Option<usize>,
     ) -> Result<Self, CompensatorError> {
         if model.direction != method.needs() {
             return Err(CompensatorError::WrongDirection {
@@ -241,6 +262,28 @@ impl ScaledCompensator {
                 normalised,
             )?),
         };
+        let mut preview_samples = 0;
+        let inner: Box<dyn Compensator<f64> + Send> = if model.has_links() {
+            let rate = model.sample_rate_hz.unwrap_or(1.0);
+            let vibration = match &model.vibration {
+                Some(v) => {
+                    let p = match preview {
+                        Some(p) => p,
+                        None => v.needed_preview()?,
+                    };
+                    preview_samples = p;
+                    Some(v.inverse(p)?)
+                }
+                None => None,
+            };
+            let creep = match &model.creep {
+                Some(c) => Some(c.normalised(&desired).link(rate)?.inverse()),
+                None => None,
+            };
+            Box::new(ChainCompensator::new(vibration, creep, inner))
+        } else {
+            inner
+        };
         let desired_range = (method == Method::Dihc).then(|| {
             let (a, b) = (
                 desired.to_physical(model.input_range[0]),
@@ -256,7 +299,16 @@ impl ScaledCompensator {
             limits: (min, max),
             delayed_loop_gain,
             desired_range,
+            preview: preview_samples,
         })
+    }
+
+    /// The vibration inverse's preview, samples (0 without a vibration link): [`step`]'s
+    /// output lags its input by this many samples.
+    ///
+    /// [`step`]: ScaledCompensator::step
+    pub fn preview(&self) -> usize {
+        self.preview
     }
 
     /// The method.
@@ -300,7 +352,9 @@ impl ScaledCompensator {
         self.inner.reset();
     }
 
-    /// One sample: the drive for the desired position `desired` (physical units).
+    /// One sample: the drive for the desired position `desired` (physical units). With a
+    /// vibration link the drive returned is for the desired position fed
+    /// [`ScaledCompensator::preview`] samples earlier (streaming with a preview).
     #[inline]
     pub fn step(&mut self, desired: f64) -> f64 {
         let v = self
@@ -311,7 +365,11 @@ impl ScaledCompensator {
         v.clamp(self.limits.0, self.limits.1)
     }
 
-    /// A whole signal; refuses slices of different lengths.
+    /// A whole signal; refuses slices of different lengths. With a vibration link the signal
+    /// is a whole known trajectory and the drive is aligned with it (`control[k]` for
+    /// `desired[k]`, the preview's lag removed): the trajectory is held at its last value for
+    /// the preview's samples after its end, and the drive of the preview's first samples
+    /// (before the trajectory starts, for a trajectory at rest at its first value) is dropped.
     pub fn process(
         &mut self,
         desired: &[f64],
@@ -324,8 +382,19 @@ impl ScaledCompensator {
                 found: control.len(),
             }));
         }
-        for (d, c) in desired.iter().zip(control.iter_mut()) {
-            *c = self.step(*d);
+        let Some(&last) = desired.last() else {
+            return Ok(());
+        };
+        let p = self.preview;
+        for (k, d) in desired
+            .iter()
+            .chain(std::iter::repeat_n(&last, p))
+            .enumerate()
+        {
+            let v = self.step(*d);
+            if k >= p {
+                control[k - p] = v;
+            }
         }
         Ok(())
     }

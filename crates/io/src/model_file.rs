@@ -1,10 +1,12 @@
 //! The model file: a JSON document holding one identified MPIM (eq. (4)) in the paper's
 //! normalised units (eq. (11)), the physical scales and units that map it to the real world,
-//! and the direction it maps.
+//! the direction it maps, and (format_version 2) optionally the creep and vibration links of
+//! the chain `hysteresis -> creep -> vibration` (Croft, Shed & Devasia 2001,
+//! doi:10.1115/1.1341197; see `hystcomp_core::ChainModel`).
 //!
 //! ```json
 //! {
-//!   "format_version": 1,
+//!   "format_version": 2,
 //!   "direction": "plant",
 //!   "description": "Table 1 of Gu & Zhu (2014)",
 //!   "input":  { "quantity": "voltage",      "unit": "V",  "offset": 0.0, "scale": 10.0 },
@@ -28,17 +30,123 @@
 //!   (`[0, 1]` when the thresholds are fractions of the input range, eq. (11)).
 //! - `thresholds`, `weights`, `a1`, `a2`: the normalised MPIM parameters of eq. (4).
 //! - `identification`: optional free-form JSON (solver, fit errors, data source...).
+//!
+//! # Format version 2: creep and vibration (optional)
+//! Version 1 files hold the MPIM alone and still load (they are written back as version 2,
+//! which differs only by the optional parts below). A file without `creep` and `vibration` is
+//! the hysteresis-only model of version 1.
+//!
+//! ```json
+//!   "sample_rate_hz": 10000.0,
+//!   "creep": { "origin": 0.0, "time_constants_s": [0.01, 0.0316, ...], "weights": [0.004, ...] },
+//!   "vibration": { "delay_samples": 0, "numerator": [0.02, 0.05, ...], "denominator": [1.0, -1.7, ...] }
+//! ```
+//!
+//! - `sample_rate_hz`: the rate the record was sampled at, Hz; required with either part. The
+//!   creep link is discretised for whatever rate it runs at; the vibration link is a
+//!   discrete-time model at this rate and only runs at it.
+//! - `creep`: the link `h = x - sum_i c_i (z_i[x] - origin)`, `tau_i dz_i/dt = x - z_i`
+//!   (`hystcomp_core::Creep`, written through its inverse) acting on the **displacement** in
+//!   the file's displacement unit: the plant's hysteresis output `h` creeps to the
+//!   displacement `x`. `origin` is the relaxed displacement (the displacement at rest), in
+//!   that unit; `weights` are dimensionless (`sum |c_i| < 1`).
+//! - `vibration`: `y(k) = sum_j b_j x(k - d - j) - sum_{i>=1} a_i y(k - i)` with `numerator`
+//!   `b_0..b_m`, `denominator` `1, a_1..a_n`, `delay_samples` `d`, unit static gain
+//!   (`hystcomp_core::Vibration`), on the displacement.
+//!
+//! In a **plant** file the model is `y = D[C[H[v]]]`. In an **inverse** file (DIHC) the same
+//! two links are the plant's, and the compensator is `v = H^-1[C^-1[D^-1[y_d]]]`, where the
+//! file's MPIM `H^-1` maps the creep-free displacement `C^-1[D^-1[y]]` to the voltage.
 
 use std::fmt;
 use std::path::Path;
 
-use hystcomp_core::{CoreError, Mpim};
+use hystcomp_core::{CoreError, Creep, CreepInverse, Mpim, Vibration, VibrationInverse};
 use serde::{Deserialize, Serialize};
 
 use crate::atomic::write_atomic;
 
-/// The only `format_version` this crate reads and writes.
-pub const FORMAT_VERSION: u32 = 1;
+/// The `format_version` this crate writes.
+pub const FORMAT_VERSION: u32 = 2;
+
+/// Every `format_version` this crate reads: 1 (the MPIM alone) and 2 (optionally with creep
+/// and vibration).
+pub const READABLE_VERSIONS: [u32; 2] = [1, 2];
+
+/// The most creep elements a file may hold (the core's limit).
+pub const MAX_CREEP_ELEMENTS: usize = hystcomp_core::MAX_CREEP_ELEMENTS;
+
+/// The creep link of a format-version-2 file (see the [module documentation](self)).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct CreepPart {
+    /// The relaxed displacement (at rest), in the file's displacement unit.
+    pub origin: f64,
+    /// Time constants `tau_i`, s, positive.
+    pub time_constants_s: Vec<f64>,
+    /// Weights `c_i` of the inverse parameterisation, dimensionless, `sum |c_i| < 1`.
+    pub weights: Vec<f64>,
+}
+
+impl CreepPart {
+    /// The forward link, discretised for `sample_rate_hz`, in physical units.
+    pub fn link(&self, sample_rate_hz: f64) -> Result<Creep<f64, Vec<f64>>, CoreError> {
+        Creep::new(
+            &self.time_constants_s,
+            &self.weights,
+            self.origin,
+            1.0 / sample_rate_hz,
+        )
+    }
+
+    /// The same link in the normalised units of `scale` (`origin` mapped; the weights are
+    /// dimensionless).
+    pub fn normalised(&self, scale: &Scale) -> CreepPart {
+        CreepPart {
+            origin: scale.normalise(self.origin),
+            ..self.clone()
+        }
+    }
+}
+
+/// The vibration link of a format-version-2 file (see the [module documentation](self)).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct VibrationPart {
+    /// Pure delay `d`, samples of the file's `sample_rate_hz`.
+    pub delay_samples: usize,
+    /// `b_0..b_m`.
+    pub numerator: Vec<f64>,
+    /// `1, a_1..a_n`.
+    pub denominator: Vec<f64>,
+}
+
+impl VibrationPart {
+    /// The forward link.
+    pub fn link(&self) -> Result<Vibration<f64, Vec<f64>>, CoreError> {
+        Vibration::new(&self.numerator, &self.denominator, self.delay_samples)
+    }
+
+    /// Its stable inverse with a preview of `preview` samples.
+    pub fn inverse(&self, preview: usize) -> Result<VibrationInverse<f64, Vec<f64>>, CoreError> {
+        VibrationInverse::new(
+            &self.numerator,
+            &self.denominator,
+            self.delay_samples,
+            preview,
+        )
+    }
+
+    /// The preview for an inverse whose cut tail is negligible (offline inversion).
+    pub fn needed_preview(&self) -> Result<usize, CoreError> {
+        VibrationInverse::<f64, Vec<f64>>::needed_preview(&self.numerator, self.delay_samples)
+    }
+
+    /// The shortest preview that inverts it at all.
+    pub fn minimum_preview(&self) -> Result<usize, CoreError> {
+        VibrationInverse::<f64, Vec<f64>>::minimum_preview(&self.numerator, self.delay_samples)
+    }
+}
 
 /// The most play operators a model file may hold (10 000): compensators build in time linear
 /// in the operators and step in time linear in them (about 25 us per sample at 10 000), so
@@ -107,7 +215,8 @@ impl Scale {
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct ModelFile {
-    /// Always [`FORMAT_VERSION`].
+    /// One of [`READABLE_VERSIONS`] (as read; [`ModelFile::to_json`] writes
+    /// [`FORMAT_VERSION`]).
     pub format_version: u32,
     /// What the model maps.
     pub direction: Direction,
@@ -128,6 +237,16 @@ pub struct ModelFile {
     pub a1: f64,
     /// Linear coefficient `a2`.
     pub a2: f64,
+    /// The sample rate of the record the time-dependent parts were identified on, Hz
+    /// (format version 2; required with `creep` or `vibration`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub sample_rate_hz: Option<f64>,
+    /// The creep link (format version 2), if any.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub creep: Option<CreepPart>,
+    /// The vibration link (format version 2), if any.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub vibration: Option<VibrationPart>,
     /// Free-form metadata: how the model was obtained.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub identification: Option<serde_json::Value>,
@@ -198,8 +317,8 @@ impl fmt::Display for ModelFileError {
             }
             ModelFileError::UnknownVersion { path, found } => write!(
                 f,
-                "{path} has format_version {found}, but this hystcomp reads format_version \
-                 {FORMAT_VERSION}; update hystcomp or re-identify the model"
+                "{path} has format_version {found}, but this hystcomp reads format_version 1 \
+                 and 2; update hystcomp or re-identify the model"
             ),
             ModelFileError::Invalid { message } => f.write_str(message),
             ModelFileError::Model(e) => write!(f, "the model parameters are refused: {e}"),
@@ -256,10 +375,37 @@ impl ModelFile {
             weights,
             a1,
             a2,
+            sample_rate_hz: None,
+            creep: None,
+            vibration: None,
             identification: None,
         };
         file.validate()?;
         Ok(file)
+    }
+
+    /// The same model with the creep and vibration links `creep` and `vibration` (either may
+    /// be `None`) for records sampled at `sample_rate_hz`; validated.
+    pub fn with_links(
+        mut self,
+        sample_rate_hz: f64,
+        creep: Option<CreepPart>,
+        vibration: Option<VibrationPart>,
+    ) -> Result<Self, ModelFileError> {
+        self.format_version = FORMAT_VERSION;
+        self.sample_rate_hz = Some(sample_rate_hz);
+        self.creep = creep;
+        self.vibration = vibration;
+        if self.creep.is_none() && self.vibration.is_none() {
+            self.sample_rate_hz = None;
+        }
+        self.validate()?;
+        Ok(self)
+    }
+
+    /// `true` when the file holds a creep or a vibration link (a chain beyond hysteresis).
+    pub fn has_links(&self) -> bool {
+        self.creep.is_some() || self.vibration.is_some()
     }
 
     /// A model file for `model` (its parameters; not its memory).
@@ -286,13 +432,16 @@ impl ModelFile {
     /// [`MAX_OFFSET`], units named), the input range (finite, `lo < hi`), the number of
     /// operators (at most [`MAX_OPERATORS`]) and the MPIM parameters (see [`Mpim::new`]). Invertibility is
     /// checked where the model is used (a compensator), with the limits it is used with.
+    /// With creep or vibration: version 2, a positive finite `sample_rate_hz`, and links the
+    /// core accepts (`hystcomp_core::Creep::new`, `hystcomp_core::Vibration::new`).
     pub fn validate(&self) -> Result<(), ModelFileError> {
-        if self.format_version != FORMAT_VERSION {
+        if !READABLE_VERSIONS.contains(&self.format_version) {
             return Err(ModelFileError::UnknownVersion {
                 path: "the model".into(),
                 found: self.format_version.into(),
             });
         }
+        self.validate_links()?;
         for (name, s) in [("input", &self.input), ("output", &self.output)] {
             if !(s.offset.is_finite() && s.scale.is_finite() && s.scale > 0.0) {
                 return Err(ModelFileError::Invalid {
@@ -339,6 +488,39 @@ impl ModelFile {
             });
         }
         self.model()?;
+        Ok(())
+    }
+
+    fn validate_links(&self) -> Result<(), ModelFileError> {
+        if !self.has_links() {
+            return Ok(());
+        }
+        if self.format_version < 2 {
+            return Err(ModelFileError::Invalid {
+                message: "creep and vibration need format_version 2".into(),
+            });
+        }
+        let rate = match self.sample_rate_hz {
+            Some(rate) if rate.is_finite() && rate > 0.0 => rate,
+            other => {
+                return Err(ModelFileError::Invalid {
+                    message: format!(
+                        "sample_rate_hz must be given, positive and finite with creep or \
+                         vibration (got {other:?})"
+                    ),
+                });
+            }
+        };
+        if let Some(creep) = &self.creep {
+            creep.link(rate).map_err(|e| ModelFileError::Invalid {
+                message: format!("creep: {e}"),
+            })?;
+        }
+        if let Some(vibration) = &self.vibration {
+            vibration.link().map_err(|e| ModelFileError::Invalid {
+                message: format!("vibration: {e}"),
+            })?;
+        }
         Ok(())
     }
 
@@ -405,7 +587,7 @@ impl ModelFile {
                 },
             })?;
         match value.get("format_version").and_then(|v| v.as_u64()) {
-            Some(v) if v == u64::from(FORMAT_VERSION) => {}
+            Some(v) if READABLE_VERSIONS.iter().any(|r| u64::from(*r) == v) => {}
             Some(found) => {
                 return Err(ModelFileError::UnknownVersion {
                     path: String::new(),
@@ -429,10 +611,15 @@ impl ModelFile {
         Ok(file)
     }
 
-    /// The file's text: pretty-printed JSON with a final newline.
+    /// The file's text: pretty-printed JSON with a final newline, as [`FORMAT_VERSION`] (a
+    /// version-1 file read is written back as version 2, which only adds optional parts).
     pub fn to_json(&self) -> String {
+        let current = ModelFile {
+            format_version: FORMAT_VERSION,
+            ..self.clone()
+        };
         let mut text =
-            serde_json::to_string_pretty(self).expect("a model file always serialises to JSON");
+            serde_json::to_string_pretty(&current).expect("a model file always serialises to JSON");
         text.push('\n');
         text
     }
@@ -446,12 +633,48 @@ impl ModelFile {
 
     /// Runs the model over a whole record in physical units, from zero memory (eq. (1)):
     /// `output[k] = output.offset + output.scale * P[(input[k] - input.offset) / input.scale]`.
+    ///
+    /// With creep and vibration (sampled at the file's `sample_rate_hz`): a plant file runs
+    /// the chain `D[C[H[v]]]`, creep starting relaxed at `origin` and the vibration link at
+    /// rest at its first input; an inverse file runs `H^-1[C^-1[D^-1[y]]]`, the vibration
+    /// inverse non-causally over the whole record (the record taken at rest at its first
+    /// value before it starts and at its last after it ends).
     pub fn predict(&self, input: &[f64]) -> Result<Vec<f64>, ModelFileError> {
         let mut model = self.model()?;
-        Ok(input
-            .iter()
-            .map(|&x| self.output_to_physical(model.step(self.normalise_input(x))))
-            .collect())
+        let rate = self.sample_rate_hz.unwrap_or(1.0);
+        match self.direction {
+            Direction::Plant => {
+                let mut creep = self.creep.as_ref().map(|c| c.link(rate)).transpose()?;
+                let mut vibration = self.vibration.as_ref().map(|v| v.link()).transpose()?;
+                Ok(input
+                    .iter()
+                    .map(|&x| {
+                        let mut y = self.output_to_physical(model.step(self.normalise_input(x)));
+                        if let Some(c) = &mut creep {
+                            y = c.step(y);
+                        }
+                        if let Some(d) = &mut vibration {
+                            y = d.step(y);
+                        }
+                        y
+                    })
+                    .collect())
+            }
+            Direction::Inverse => {
+                let mut x = input.to_vec();
+                if let Some(v) = &self.vibration {
+                    let mut inverse = v.inverse(v.needed_preview()?)?;
+                    inverse.process_aligned(input, &mut x)?;
+                }
+                if let Some(c) = &self.creep {
+                    let mut inverse: CreepInverse<f64, Vec<f64>> = c.link(rate)?.inverse();
+                    x.iter_mut().for_each(|x| *x = inverse.step(*x));
+                }
+                Ok(x.iter()
+                    .map(|&x| self.output_to_physical(model.step(self.normalise_input(x))))
+                    .collect())
+            }
+        }
     }
 
     /// How many of the physical `inputs` lie outside the range the model was identified on

@@ -84,7 +84,7 @@ fn refusal(edit: impl Fn(&mut serde_json::Value)) -> String {
 
 #[test]
 fn each_bad_file_is_refused_with_a_message_naming_the_problem() {
-    assert!(refusal(|v| v["format_version"] = 2.into()).contains("format_version 2"));
+    assert!(refusal(|v| v["format_version"] = 3.into()).contains("format_version 3"));
     assert!(
         refusal(|v| {
             v.as_object_mut().unwrap().remove("format_version");

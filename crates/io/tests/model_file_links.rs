@@ -1,0 +1,162 @@
+//! Format version 2: the optional creep and vibration links, read, written, refused, predicted
+//! with and compensated, against the core's chain as the reference.
+
+use std::path::PathBuf;
+
+use hystcomp_core::{ChainModel, Creep, Vibration};
+use hystcomp_io::compensator::{Method, ScaledCompensator};
+use hystcomp_io::model_file::{CreepPart, ModelFile, VibrationPart};
+
+fn table1() -> ModelFile {
+    ModelFile::load(
+        &PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+            .join("../../models")
+            .join("table1-plant.json"),
+    )
+    .unwrap()
+}
+
+fn creep() -> CreepPart {
+    CreepPart {
+        origin: 0.0,
+        time_constants_s: vec![0.01, 0.1, 1.0, 10.0],
+        weights: vec![0.01, 0.02, 0.02, 0.03],
+    }
+}
+
+/// A resonance at 0.05 of the sample rate with a zero outside the unit circle (as sampling a
+/// stage gives), unit static gain.
+fn vibration() -> VibrationPart {
+    let a = [1.0, -2.0 * 0.97 * (0.3f64).cos(), 0.97 * 0.97];
+    let shape = [1.0, 2.5];
+    let gain = a.iter().sum::<f64>() / shape.iter().sum::<f64>();
+    VibrationPart {
+        delay_samples: 1,
+        numerator: shape.iter().map(|b| b * gain).collect(),
+        denominator: a.to_vec(),
+    }
+}
+
+fn full() -> ModelFile {
+    table1()
+        .with_links(1000.0, Some(creep()), Some(vibration()))
+        .unwrap()
+}
+
+#[test]
+fn version_1_files_load_and_are_written_as_version_2_with_the_links() {
+    let v1 = table1();
+    assert_eq!(v1.format_version, 1);
+    assert!(!v1.has_links());
+    let text = v1.to_json();
+    assert!(text.contains("\"format_version\": 2"), "{text}");
+    assert!(!text.contains("creep") && !text.contains("sample_rate_hz"));
+    let file = full();
+    let back = ModelFile::from_json(&file.to_json()).unwrap();
+    assert_eq!(back, file);
+    assert!(back.to_json().contains("\"time_constants_s\""));
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("full.json");
+    file.save(&path).unwrap();
+    assert_eq!(ModelFile::load(&path).unwrap(), file);
+}
+
+#[test]
+fn bad_links_are_refused_naming_the_part() {
+    let text = full().to_json();
+    let refuse = |edit: &dyn Fn(&mut serde_json::Value)| {
+        let mut value: serde_json::Value = serde_json::from_str(&text).unwrap();
+        edit(&mut value);
+        ModelFile::from_json(&value.to_string())
+            .unwrap_err()
+            .to_string()
+    };
+    assert!(refuse(&|v| v["format_version"] = 1.into()).contains("format_version 2"));
+    assert!(
+        refuse(&|v| {
+            v.as_object_mut().unwrap().remove("sample_rate_hz");
+        })
+        .contains("sample_rate_hz")
+    );
+    assert!(refuse(&|v| v["sample_rate_hz"] = (-3.0).into()).contains("sample_rate_hz"));
+    assert!(refuse(&|v| v["creep"]["weights"][0] = 0.99.into()).contains("creep"));
+    assert!(refuse(&|v| v["creep"]["time_constants_s"][1] = 0.0.into()).contains("creep"));
+    assert!(refuse(&|v| v["creep"]["weights"] = serde_json::json!([0.1])).contains("creep"));
+    assert!(refuse(&|v| v["vibration"]["numerator"][0] = 5.0.into()).contains("static gain"));
+    assert!(refuse(&|v| v["vibration"]["denominator"][2] = 1.5.into()).contains("vibration"));
+    assert!(refuse(&|v| v["vibration"]["colour"] = "red".into()).contains("colour"));
+}
+
+#[test]
+fn predict_runs_the_core_chain_in_physical_units() {
+    let file = full();
+    let volts: Vec<f64> = (0..4000)
+        .map(|k| 5.0 + 4.0 * (k as f64 * 0.01).sin())
+        .collect();
+    let predicted = file.predict(&volts).unwrap();
+    // The reference: the core's chain, scaled by hand.
+    let c = creep();
+    let v = vibration();
+    let mut chain: ChainModel<f64, Vec<f64>, Vec<f64>> = ChainModel {
+        hysteresis: file.model().unwrap(),
+        creep: None,
+        vibration: None,
+    };
+    let mut creep_link: Creep<f64, Vec<f64>> =
+        Creep::new(&c.time_constants_s, &c.weights, c.origin, 1e-3).unwrap();
+    let mut vibration_link: Vibration<f64, Vec<f64>> =
+        Vibration::new(&v.numerator, &v.denominator, v.delay_samples).unwrap();
+    for (k, volt) in volts.iter().enumerate() {
+        let h = file.output_to_physical(chain.step(file.normalise_input(*volt)));
+        let y = vibration_link.step(creep_link.step(h));
+        assert!((predicted[k] - y).abs() < 1e-9, "{k}");
+    }
+    // Creep is there: a held voltage keeps moving the prediction.
+    let held = file.predict(&vec![6.0; 20_000]).unwrap();
+    assert!(
+        held[19_999] - held[2000] > 0.01 * 75.0 * 0.1,
+        "{}",
+        held[19_999] - held[2000]
+    );
+}
+
+#[test]
+fn the_full_compensator_inverts_the_predicted_chain() {
+    let file = full();
+    // A reachable desired trajectory: the chain's own output for a slow drive from rest.
+    let volts: Vec<f64> = (0..6000)
+        .map(|k| {
+            let t = k as f64 * 1e-3;
+            let rise = 0.5 - 0.5 * (std::f64::consts::PI * (t / 0.5).min(1.0)).cos();
+            rise * (5.0 + 3.5 * (2.0 * std::f64::consts::PI * 0.7 * t).sin())
+        })
+        .collect();
+    let desired = file.predict(&volts).unwrap();
+    for method in [Method::Ihc, Method::Wihc] {
+        let mut compensator = ScaledCompensator::new(&file, method, None).unwrap();
+        assert!(compensator.preview() >= 2);
+        let mut drive = vec![0.0; desired.len()];
+        compensator.process(&desired, &mut drive).unwrap();
+        let reached = file.predict(&drive).unwrap();
+        let worst = reached
+            .iter()
+            .zip(&desired)
+            .skip(1)
+            .map(|(a, b)| (a - b).abs())
+            .fold(0.0, f64::max);
+        assert!(worst < 1e-6, "{method}: {worst} um");
+    }
+    // Streaming with a short preview: the same drive, late by the preview, close to it.
+    let minimum = vibration().minimum_preview().unwrap();
+    let mut streaming =
+        ScaledCompensator::with_preview(&file, Method::Ihc, None, Some(minimum + 4)).unwrap();
+    assert_eq!(streaming.preview(), minimum + 4);
+    let mut offline = ScaledCompensator::new(&file, Method::Ihc, None).unwrap();
+    let mut aligned = vec![0.0; desired.len()];
+    offline.process(&desired, &mut aligned).unwrap();
+    let lag = streaming.preview();
+    let late: Vec<f64> = desired.iter().map(|d| streaming.step(*d)).collect();
+    for k in 200..desired.len() {
+        assert!((late[k] - aligned[k - lag]).abs() < 1e-3, "{k}");
+    }
+}
