@@ -193,18 +193,136 @@ impl std::error::Error for FigureError {
 /// One labelled curve: `y[i]` against `x[i]`.
 #[derive(Debug, Clone, Copy)]
 pub struct Series<'a> {
-    /// Legend text, e.g. `"desired y_d"`.
+    /// Legend text, e.g. `"desired y_d"`; an empty label leaves the series out of the legend.
     pub label: &'a str,
     /// Horizontal coordinates (µm for maps, s for time series).
     pub x: &'a [f64],
     /// Vertical coordinates, one per `x`.
     pub y: &'a [f64],
+    /// Colour and line; `None` takes the next of the palette and the line patterns in turn.
+    pub style: Option<SeriesStyle>,
 }
 
 impl<'a> Series<'a> {
     /// A series from its legend text and coordinates.
     pub fn new(label: &'a str, x: &'a [f64], y: &'a [f64]) -> Self {
-        Series { label, x, y }
+        Series {
+            label,
+            x,
+            y,
+            style: None,
+        }
+    }
+}
+
+/// A colour of the figures: the Okabe-Ito colour-blind-safe palette, plus black.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Colour {
+    /// #0072B2.
+    Blue,
+    /// #D55E00.
+    Vermilion,
+    /// #009E73.
+    Green,
+    /// #CC79A7.
+    Purple,
+    /// #E69F00.
+    Orange,
+    /// #56B4E9.
+    SkyBlue,
+    /// #000000.
+    Black,
+}
+
+impl Colour {
+    fn rgb(self) -> RGBColor {
+        match self {
+            Colour::Blue => PALETTE[0],
+            Colour::Vermilion => PALETTE[1],
+            Colour::Green => PALETTE[2],
+            Colour::Purple => PALETTE[3],
+            Colour::Orange => PALETTE[4],
+            Colour::SkyBlue => PALETTE[5],
+            Colour::Black => BLACK,
+        }
+    }
+
+    /// `#RRGGBB`, as the SVG files write it.
+    pub fn hex(self) -> String {
+        let RGBColor(r, g, b) = self.rgb();
+        format!("#{r:02X}{g:02X}{b:02X}")
+    }
+}
+
+/// A line pattern.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Line {
+    /// Solid.
+    Solid,
+    /// Long dashes.
+    Dashed,
+    /// Short dots.
+    Dotted,
+}
+
+/// How a series is drawn.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct SeriesStyle {
+    /// Its colour.
+    pub colour: Colour,
+    /// Its line.
+    pub line: Line,
+    /// Drawn thin and pale, behind what matters (e.g. raw loops behind their envelope).
+    pub faint: bool,
+}
+
+impl SeriesStyle {
+    /// The desired trajectory `y_d`: black, dashed.
+    pub const DESIRED: SeriesStyle = SeriesStyle::solid(Colour::Black).with_line(Line::Dashed);
+    /// The uncompensated run (linear feedforward gain).
+    pub const UNCOMPENSATED: SeriesStyle = SeriesStyle::solid(Colour::Orange);
+    /// IHC, in every figure and pipeline.
+    pub const IHC: SeriesStyle = SeriesStyle::solid(Colour::Blue);
+    /// WIHC, in every figure and pipeline.
+    pub const WIHC: SeriesStyle = SeriesStyle::solid(Colour::Vermilion).with_line(Line::Dashed);
+    /// DIHC, in every figure and pipeline.
+    pub const DIHC: SeriesStyle = SeriesStyle::solid(Colour::Green);
+
+    /// A solid line of `colour`.
+    pub const fn solid(colour: Colour) -> Self {
+        SeriesStyle {
+            colour,
+            line: Line::Solid,
+            faint: false,
+        }
+    }
+
+    /// The same with another line pattern.
+    pub const fn with_line(mut self, line: Line) -> Self {
+        self.line = line;
+        self
+    }
+
+    /// The same drawn faint (thin, pale, solid).
+    pub const fn faint(mut self) -> Self {
+        self.faint = true;
+        self.line = Line::Solid;
+        self
+    }
+
+    /// The style of an approach in every figure: `"ihc"`, `"wihc"`, `"dihc"` (also with a
+    /// `-delayed` suffix, the same approach), `"uncompensated"`, `"desired"`. A new approach
+    /// (a pipeline's chain, a learned correction) adds its name here, so that it keeps one
+    /// colour across figures.
+    pub fn of_approach(name: &str) -> Option<SeriesStyle> {
+        match name.trim_end_matches("-delayed") {
+            "ihc" => Some(SeriesStyle::IHC),
+            "wihc" => Some(SeriesStyle::WIHC),
+            "dihc" => Some(SeriesStyle::DIHC),
+            "uncompensated" => Some(SeriesStyle::UNCOMPENSATED),
+            "desired" => Some(SeriesStyle::DESIRED),
+            _ => None,
+        }
     }
 }
 
@@ -244,6 +362,12 @@ pub struct Panel<'a> {
     pub max_points: usize,
     /// A logarithmic vertical axis (every `y` must then be > 0).
     pub log_y: bool,
+    /// A fixed vertical range `(lo, hi)` instead of the data's, e.g. the same for panels that
+    /// are to be compared by eye; data outside it is clipped.
+    pub y_range: Option<(f64, f64)>,
+    /// Leave a band at the top for the legend and notes, so that they never cover data (always
+    /// so for time series; for maps whose corners are not empty).
+    pub legend_band: bool,
 }
 
 impl<'a> Panel<'a> {
@@ -260,6 +384,8 @@ impl<'a> Panel<'a> {
             notes: Vec::new(),
             max_points: DEFAULT_MAX_POINTS,
             log_y: false,
+            y_range: None,
+            legend_band: false,
         }
     }
 
@@ -275,12 +401,40 @@ impl<'a> Panel<'a> {
             notes: Vec::new(),
             max_points: DEFAULT_MAX_POINTS,
             log_y: false,
+            y_range: None,
+            legend_band: false,
         }
     }
 
     /// Adds a series (builder style).
     pub fn with_series(mut self, label: &'a str, x: &'a [f64], y: &'a [f64]) -> Self {
         self.series.push(Series::new(label, x, y));
+        self
+    }
+
+    /// Adds a series drawn in `style` (builder style).
+    pub fn with_styled_series(
+        mut self,
+        label: &'a str,
+        x: &'a [f64],
+        y: &'a [f64],
+        style: SeriesStyle,
+    ) -> Self {
+        let mut series = Series::new(label, x, y);
+        series.style = Some(style);
+        self.series.push(series);
+        self
+    }
+
+    /// Fixes the vertical range (builder style), e.g. to share it between panels.
+    pub fn with_y_range(mut self, lo: f64, hi: f64) -> Self {
+        self.y_range = Some((lo, hi));
+        self
+    }
+
+    /// Leaves a band at the top for the legend and notes (builder style).
+    pub fn with_legend_band(mut self) -> Self {
+        self.legend_band = true;
         self
     }
 
@@ -527,6 +681,13 @@ fn prepare<'a>(panel: &'a Panel<'a>, plot_px: f64) -> Result<PreparedPanel<'a>, 
     let too_wide = || FigureError::RangeTooWide {
         panel: panel.title.to_string(),
     };
+    let fixed = match panel.y_range {
+        Some((lo, hi)) if lo.is_finite() && hi.is_finite() && lo < hi => {
+            Some((to_axis(lo), to_axis(hi)))
+        }
+        Some(_) => return Err(too_wide()),
+        None => None,
+    };
     let (x_range, y_range) = match panel.kind {
         PanelKind::Map { diagonal } => {
             let (x_span, y_span) = if diagonal {
@@ -535,26 +696,36 @@ fn prepare<'a>(panel: &'a Panel<'a>, plot_px: f64) -> Result<PreparedPanel<'a>, 
             } else {
                 (x_span, y_span)
             };
-            (
-                padded(x_span, 0.03, 0.03).ok_or_else(too_wide)?,
-                padded(y_span, 0.03, 0.03).ok_or_else(too_wide)?,
-            )
+            let y = match fixed {
+                Some(y) => y,
+                None => padded(y_span, 0.03, 0.03).ok_or_else(too_wide)?,
+            };
+            (padded(x_span, 0.03, 0.03).ok_or_else(too_wide)?, y)
         }
         PanelKind::TimeSeries => {
             let x = padded(x_span, 0.0, 0.0).ok_or_else(too_wide)?;
-            // Headroom for the legend: rows of ~1.3 font heights plus margins, as a fraction
-            // of the plot height (checked by eye on the rendered figures).
-            let rows = panel.series.len().max(panel.notes.len()) as f64;
-            let legend_px = rows * LEGEND_FONT_PX as f64 * 1.3 + 32.0;
-            let top = (legend_px / plot_px).min(0.6);
-            let y = padded(y_span, 0.05, 0.05).ok_or_else(too_wide)?;
-            let width = y.1 - y.0;
-            let y = (y.0, y.1 + width * top / (1.0 - top));
-            if !(y.1 - y.0).is_finite() {
-                return Err(too_wide());
-            }
+            let y = match fixed {
+                Some(y) => y,
+                None => padded(y_span, 0.05, 0.05).ok_or_else(too_wide)?,
+            };
             (x, y)
         }
+    };
+    let y_range = if panel.kind == PanelKind::TimeSeries || panel.legend_band {
+        // Headroom for the legend: rows of ~1.3 font heights plus margins, as a fraction
+        // of the plot height (checked by eye on the rendered figures).
+        let labelled = panel.series.iter().filter(|s| !s.label.is_empty()).count();
+        let rows = labelled.max(panel.notes.len()) as f64;
+        let legend_px = rows * LEGEND_FONT_PX as f64 * 1.3 + 32.0;
+        let top = (legend_px / plot_px).min(0.6);
+        let width = y_range.1 - y_range.0;
+        let y = (y_range.0, y_range.1 + width * top / (1.0 - top));
+        if !(y.1 - y.0).is_finite() {
+            return Err(too_wide());
+        }
+        y
+    } else {
+        y_range
     };
     let y_range = if panel.log_y {
         (10f64.powf(y_range.0), 10f64.powf(y_range.1))
@@ -610,15 +781,18 @@ const PALETTE: [RGBColor; 6] = [
     RGBColor(86, 180, 233),  // sky blue
 ];
 
-/// Line patterns, cycled with a period coprime to the palette's so that pairs stay distinct.
-#[derive(Clone, Copy)]
-enum Dash {
-    Solid,
-    Dashed,
-    Dotted,
-}
+/// The colours of series without a style, in turn.
+const DEFAULT_COLOURS: [Colour; 6] = [
+    Colour::Blue,
+    Colour::Vermilion,
+    Colour::Green,
+    Colour::Purple,
+    Colour::Orange,
+    Colour::SkyBlue,
+];
 
-const DASHES: [Dash; 4] = [Dash::Solid, Dash::Dashed, Dash::Solid, Dash::Dotted];
+/// Line patterns, cycled with a period coprime to the palette's so that pairs stay distinct.
+const DASHES: [Line; 4] = [Line::Solid, Line::Dashed, Line::Solid, Line::Dotted];
 
 enum Layout<'a> {
     Single(&'a PreparedPanel<'a>),
@@ -820,44 +994,60 @@ where
     }
 
     for (k, (series, points)) in panel.series.iter().zip(&prepared.points).enumerate() {
-        let colour = PALETTE[k % PALETTE.len()];
+        let style = series.style.unwrap_or(SeriesStyle {
+            colour: DEFAULT_COLOURS[k % DEFAULT_COLOURS.len()],
+            line: DASHES[k % DASHES.len()],
+            faint: false,
+        });
+        let colour = style.colour.rgb();
         // Dense records (more points than the plot has pixels across) are drawn thin so that
         // overlaid noisy series stay apart; the legend keeps a thick line to show the colour.
-        let width = if points.len() > DENSE_POINTS { 1 } else { 2 };
-        let style = colour.stroke_width(width);
+        let width = if points.len() > DENSE_POINTS || style.faint {
+            1
+        } else {
+            2
+        };
+        let pen = if style.faint {
+            colour.mix(0.3).stroke_width(width)
+        } else {
+            colour.stroke_width(width)
+        };
         let key = colour.stroke_width(2);
-        let label = series.label;
-        let dash = DASHES[k % DASHES.len()];
-        let anno = match dash {
-            Dash::Solid => chart
-                .draw_series(LineSeries::new(points.iter().copied(), style))
+        let anno = match style.line {
+            Line::Solid => chart
+                .draw_series(LineSeries::new(points.iter().copied(), pen))
                 .map_err(drawing_error)?,
-            Dash::Dashed => chart
-                .draw_series(DashedLineSeries::new(points.iter().copied(), 12, 7, style))
+            Line::Dashed => chart
+                .draw_series(DashedLineSeries::new(points.iter().copied(), 12, 7, pen))
                 .map_err(drawing_error)?,
-            Dash::Dotted => chart
-                .draw_series(DashedLineSeries::new(points.iter().copied(), 3, 5, style))
+            Line::Dotted => chart
+                .draw_series(DashedLineSeries::new(points.iter().copied(), 3, 5, pen))
                 .map_err(drawing_error)?,
         };
-        anno.label(label);
-        match dash {
-            Dash::Solid => {
+        if series.label.is_empty() {
+            continue;
+        }
+        anno.label(series.label);
+        match style.line {
+            Line::Solid => {
                 anno.legend(move |(x, y)| PathElement::new([(x, y), (x + 32, y)], key));
             }
-            Dash::Dashed => {
+            Line::Dashed => {
                 anno.legend(move |(x, y)| {
                     DashedPathElement::new([(x, y), (x + 32, y)], 10, 6, key)
                 });
             }
-            Dash::Dotted => {
+            Line::Dotted => {
                 anno.legend(move |(x, y)| DashedPathElement::new([(x, y), (x + 32, y)], 3, 5, key));
             }
         }
     }
 
     let (legend_at, notes_at) = match panel.kind {
-        PanelKind::Map { .. } => (SeriesLabelPosition::UpperLeft, Corner::LowerRight),
-        PanelKind::TimeSeries => (SeriesLabelPosition::UpperRight, Corner::UpperLeft),
+        PanelKind::Map { .. } if !panel.legend_band => {
+            (SeriesLabelPosition::UpperLeft, Corner::LowerRight)
+        }
+        _ => (SeriesLabelPosition::UpperRight, Corner::UpperLeft),
     };
     chart
         .configure_series_labels()

@@ -8,6 +8,14 @@ use hystcomp_experiments::study::Silent;
 use hystcomp_experiments::{RunMeta, StudyOptions, run_study, summarize, write_outputs};
 use hystcomp_io::model_file::ModelFile;
 
+/// The HTML of the table with the given id.
+fn table_of<'a>(html: &'a str, id: &str) -> &'a str {
+    let start = html
+        .find(&format!("id=\"{id}\""))
+        .unwrap_or_else(|| panic!("no table {id}"));
+    &html[start..start + html[start..].find("</table>").unwrap()]
+}
+
 fn meta() -> RunMeta {
     RunMeta {
         generated_at: "2026-11-22T00:00:00Z".into(),
@@ -138,17 +146,122 @@ fn default_study_meets_the_acceptance_bounds_and_writes_a_report_chromium_shows(
     let all_off = ablation("creep, noise and dynamics off");
     assert!(all_off.ihc.e_rms_percent < base.ihc.e_rms_percent);
     assert!(ablation("sensor noise off").changed && ablation("dynamics off").changed);
+    // The ablation is a table, a row per stage with its numbers.
+    let ablation_table = table_of(&html, "ablation");
     for a in &study.ablations {
-        let row = format!("{} [", a.label);
+        let row = format!("<tr><th scope=\"row\">{}", a.label);
         assert!(
-            html.contains(&row),
+            ablation_table.contains(&row),
             "the report lacks the ablation row {row}"
         );
         assert!(
-            html.contains(&format!("e_rms {:.3} %", a.ihc.e_rms_percent)),
+            ablation_table.contains(&format!("<td>{:.3}</td>", a.ihc.e_rms_percent)),
             "{}",
             a.label
         );
+    }
+    // So is the comparison of the pipelines: both families, the four e_rms of each.
+    let comparison = table_of(&html, "pipeline-comparison");
+    for family in ["IHC", "WIHC"] {
+        assert!(comparison.contains(&format!("<th scope=\"row\">{family}</th>")));
+    }
+    assert!(comparison.contains(&format!(
+        "<td>{:.3}</td>",
+        exact.runs[0].indices.e_rms_percent
+    )));
+    assert!(comparison.contains("(`paper` pipeline)") && comparison.contains("(`exact` pipeline)"));
+    // The uncompensated number is said to match by calibration; µm, never "um".
+    assert!(html.contains("because the built-in stage is calibrated to it"));
+    // (The stage file's TOML, shown verbatim, keeps its own key names.)
+    let prose = &html[..html.find("<pre class=\"config\">").unwrap()];
+    for um in [" um ", " um)", " um.", " um,", "V/um"] {
+        assert!(!prose.contains(um), "µm everywhere, not {um:?}");
+    }
+    // Figures carry the paper's numbers; the others are supplementary.
+    assert!(html.contains("<b>Fig. 7</b>") && html.contains("<b>Fig. S1</b>"));
+    assert!(html.contains("<b>Fig. 8 (a)-(c)</b>") && html.contains("<b>Fig. 12, redrawn</b>"));
+    // One colour per approach in every figure and pipeline (from the SVG files).
+    use hystcomp_experiments::figures::SeriesStyle;
+    let svg = |stem: &str| std::fs::read_to_string(out.join(format!("{stem}.svg"))).unwrap();
+    let colours = [
+        ("ihc", SeriesStyle::IHC),
+        ("wihc", SeriesStyle::WIHC),
+        ("dihc", SeriesStyle::DIHC),
+    ];
+    for pipeline in ["exact", "paper"] {
+        for (k, (family, style)) in colours.iter().enumerate() {
+            let own = svg(&format!("fig{:02}_{pipeline}_{family}", 8 + k));
+            assert!(
+                own.contains(&style.colour.hex()),
+                "fig. {} {pipeline}",
+                8 + k
+            );
+            for (other, other_style) in &colours {
+                if other != family {
+                    assert!(
+                        !own.contains(&other_style.colour.hex()),
+                        "{family} has {other}'s colour"
+                    );
+                }
+            }
+        }
+        let errors = svg(&format!("fig11_{pipeline}_errors"));
+        assert!(errors.contains(&SeriesStyle::DIHC.colour.hex()));
+        assert!(errors.contains(&SeriesStyle::IHC.colour.hex()));
+    }
+    // Panels (c) of figs. 8-10 share one scale, stated in each and the same everywhere.
+    let scale_note = |stem: &str| {
+        let text = svg(stem);
+        let at = text
+            .find("same scale in every fig. 8-10")
+            .expect("the shared scale's note");
+        text[at..at + text[at..].find('<').unwrap()].to_string()
+    };
+    let first = scale_note("fig08_exact_ihc");
+    for stem in [
+        "fig09_exact_wihc",
+        "fig10_exact_dihc",
+        "fig08_paper_ihc",
+        "fig10_paper_dihc",
+    ] {
+        assert_eq!(scale_note(stem), first, "{stem}");
+    }
+    // Fig. 12 redrawn: faint raw loops under the envelope, labelled as such.
+    let fig12 = svg("fig12_exact_hysteresis_error");
+    assert!(fig12.contains("min and max per bin"));
+    assert!(fig12.contains("opacity=\"0.3"), "faint raw loops");
+    // Every series the figures show is in CSV beside study.json, with units in the names.
+    let series = json["series"]
+        .as_array()
+        .expect("study.json lists the series files");
+    let tracking = series
+        .iter()
+        .find(|s| s["file"] == "series/tracking.csv")
+        .expect("tracking.csv");
+    let columns: Vec<&str> = tracking["columns"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|c| c.as_str().unwrap())
+        .collect();
+    assert_eq!(
+        &columns[..3],
+        ["time_s", "desired_um", "uncompensated_measured_um"]
+    );
+    assert!(
+        columns.contains(&"exact_ihc_measured_um")
+            && columns.contains(&"paper_ihc_delayed_measured_um"),
+        "{columns:?}"
+    );
+    let csv = std::fs::read_to_string(out.join("series/tracking.csv")).unwrap();
+    assert_eq!(csv.lines().count(), study.desired_um.len() + 1);
+    assert_eq!(csv.lines().next().unwrap(), columns.join(","));
+    for name in [
+        "identification.csv",
+        "pso_convergence.csv",
+        "fig12_exact_envelope.csv",
+    ] {
+        assert!(out.join("series").join(name).is_file(), "{name}");
     }
     assert_eq!(
         json["ablations"].as_array().unwrap().len(),
@@ -325,15 +438,21 @@ fn ablations_follow_the_stage_configuration() {
     assert_eq!(creep_off.label, "creep off");
     assert!(!creep_off.changed);
     assert_eq!(creep_off.ihc, study.ablations[0].ihc);
-    let text: String = hystcomp_experiments::study_report::explanations(&study)
+    let sections = hystcomp_experiments::study_report::explanations(&study);
+    let text: String = sections
         .iter()
         .flat_map(|s| s.paragraphs.clone())
         .collect::<Vec<_>>()
         .join("\n");
+    let ablation = sections
+        .iter()
+        .flat_map(|s| &s.tables)
+        .find(|t| t.id == "ablation")
+        .expect("the ablation table");
+    assert_eq!(ablation.rows[1].header, "creep off (already so)");
     assert!(
         text.contains("asymmetric Bouc-Wen hysteresis (A = 0.40648"),
         "{text}"
     );
-    assert!(text.contains("already so in this stage"), "{text}");
     assert!(!text.contains("Preisach"), "{text}");
 }

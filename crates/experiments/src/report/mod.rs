@@ -79,6 +79,10 @@ pub struct ReportData {
     /// The pipelines, in the order of the table's columns (e.g. `paper`, then `exact`).
     /// Names must be distinct and not empty.
     pub pipelines: Vec<PipelineResult>,
+    /// Sentences shown under Table 3, after what its columns mean (e.g. that the uncompensated
+    /// number matches the paper's by calibration).
+    #[serde(default)]
+    pub table3_notes: Vec<String>,
     /// Bounds our numbers are checked against; each is marked in Table 3 and listed in words.
     pub acceptance: Vec<AcceptanceBound>,
     /// The figures, in the order shown. Their files must already be in the report's directory.

@@ -63,6 +63,7 @@ fn data() -> ReportData {
                 notes: vec![],
             },
         ],
+        table3_notes: vec!["Calibrated <by> construction.".to_string()],
         acceptance: vec![
             AcceptanceBound {
                 pipeline: Some("exact".to_string()),

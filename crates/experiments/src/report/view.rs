@@ -60,11 +60,21 @@ pub(super) fn render(
     sizes: &[(u32, u32)],
 ) -> Result<String, ReportError> {
     let mut sizes = sizes.iter().copied();
+    // Figures are labelled with the paper's number ("Fig. 8 (a)-(c)"); those the paper has
+    // no equivalent of are numbered S1, S2, ... (supplementary).
+    let mut supplementary = 0;
+    let mut label = |f: &FigureEntry| {
+        if f.paper_figure.is_empty() {
+            supplementary += 1;
+            format!("Fig. S{supplementary}")
+        } else {
+            f.paper_figure.clone()
+        }
+    };
     let figures: Vec<FigureView<'_>> = data
         .figures
         .iter()
-        .enumerate()
-        .map(|(k, f)| FigureView::new(f, format!("Figure {}", k + 1), &mut sizes))
+        .map(|f| FigureView::new(f, label(f), &mut sizes))
         .collect();
     let sections: Vec<SectionView<'_>> = data
         .sections
@@ -77,10 +87,7 @@ pub(super) fn render(
             figures: s
                 .figures
                 .iter()
-                .enumerate()
-                .map(|(k, f)| {
-                    FigureView::new(f, format!("{}, figure {}", s.heading, k + 1), &mut sizes)
-                })
+                .map(|f| FigureView::new(f, label(f), &mut sizes))
                 .collect(),
             template: s.template.as_deref(),
             data: &s.data,
@@ -184,6 +191,7 @@ struct Table3View<'a> {
     rows: Vec<Table3Row>,
     pipeline_notes: Vec<PipelineNote<'a>>,
     bins: Vec<usize>,
+    notes: &'a [String],
 }
 
 #[derive(Serialize)]
@@ -317,6 +325,7 @@ fn table3<'a>(data: &'a ReportData, reference: &Reference, checks: &[Check<'_>])
             })
             .collect(),
         bins: bins.into_iter().collect(),
+        notes: &data.table3_notes,
     }
 }
 
