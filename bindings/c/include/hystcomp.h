@@ -17,6 +17,34 @@
 #include <stdint.h>
 
 /**
+ * The most play operators `hystcomp_identify` accepts (`operators`, or `threshold_count`).
+ */
+#define HYSTCOMP_MAX_OPERATORS 1000
+
+/**
+ * The most particles of the swarm `hystcomp_identify` accepts.
+ */
+#define HYSTCOMP_MAX_PARTICLES 1000
+
+/**
+ * The most iterations of the swarm `hystcomp_identify` accepts.
+ */
+#define HYSTCOMP_MAX_ITERATIONS 100000
+
+/**
+ * The largest regressor matrix `hystcomp_identify` builds, in doubles: samples times
+ * (operators + 4) must not exceed it (2^27 doubles, 1 GiB), e.g. 10 million samples with 10
+ * operators, or 1 million with 130.
+ */
+#define HYSTCOMP_MAX_REGRESSOR_ELEMENTS (1 << 27)
+
+/**
+ * The default number of e_mhe bins across the desired range (100; at least 10 samples per bin
+ * on average are needed, see `hystcomp_e_mhe`).
+ */
+#define HYSTCOMP_DEFAULT_MHE_BINS 100
+
+/**
  * The status every fallible function returns (as an `int`). `HYSTCOMP_STATUS_OK` is 0; every
  * other value comes with a message from `hystcomp_last_error_message()`.
  */
@@ -67,6 +95,13 @@ typedef enum HystcompStatus {
      * message. The handle involved should be freed.
      */
     HYSTCOMP_STATUS_INTERNAL = 8,
+    /**
+     * No model could be identified from the samples with the options given: the displacement
+     * does not rise with the voltage (a wrong column or sign), the regressors are
+     * ill-conditioned, the constraints cannot be met, the swarm found no feasible model, or
+     * the fit's RMS error exceeds its limit. The message says what to change.
+     */
+    HYSTCOMP_STATUS_IDENTIFICATION_FAILED = 9,
 } HystcompStatus;
 
 /**
@@ -98,26 +133,461 @@ typedef enum HystcompMethod {
 } HystcompMethod;
 
 /**
+ * What a model maps (passed as an `int`).
+ */
+typedef enum HystcompDirection {
+    /**
+     * Drive voltage in, displacement out: the plant's hysteresis (IHC, WIHC).
+     */
+    HYSTCOMP_DIRECTION_PLANT = 0,
+    /**
+     * Desired displacement in, drive voltage out: the inverse hysteresis (DIHC, section 3.3).
+     */
+    HYSTCOMP_DIRECTION_INVERSE = 1,
+} HystcompDirection;
+
+/**
+ * The solver of `hystcomp_identify` (passed as an `int`).
+ */
+typedef enum HystcompSolver {
+    /**
+     * Constrained linear least squares: the global optimum for the thresholds (the default).
+     */
+    HYSTCOMP_SOLVER_LEAST_SQUARES = 0,
+    /**
+     * The particle swarm of the paper (its ref. [39]), seeded and reproducible.
+     */
+    HYSTCOMP_SOLVER_PARTICLE_SWARM = 1,
+} HystcompSolver;
+
+/**
+ * How the model output relates to the measured output (passed as an `int`).
+ */
+typedef enum HystcompOffsetMode {
+    /**
+     * A fitted constant, for sensors with an arbitrary zero (the default).
+     */
+    HYSTCOMP_OFFSET_MODE_FIT = 0,
+    /**
+     * None: the output is at its minimum when the input is (the paper's normalisation).
+     */
+    HYSTCOMP_OFFSET_MODE_NONE = 1,
+    /**
+     * The physical output offset `offset_value` (e.g. 0 for a calibrated sensor).
+     */
+    HYSTCOMP_OFFSET_MODE_VALUE = 2,
+} HystcompOffsetMode;
+
+/**
  * A feedforward compensator: desired position in, drive voltage out (opaque).
  *
- * Created by `hystcomp_compensator_from_model_file` (physical units of the model file) or
- * `hystcomp_compensator_from_parameters` (normalised units), released by
- * `hystcomp_compensator_free`.
+ * Created by `hystcomp_compensator_from_model_file` or `hystcomp_compensator_from_model`
+ * (physical units of the model) or `hystcomp_compensator_from_parameters` (normalised units),
+ * released by `hystcomp_compensator_free`.
  */
 typedef struct HystcompCompensator HystcompCompensator;
+
+/**
+ * A model file in memory (opaque): the MPIM's normalised parameters, the physical scales, the
+ * direction and how it was identified.
+ *
+ * Created by `hystcomp_model_load`, `hystcomp_model_from_values` or `hystcomp_identify`,
+ * released by `hystcomp_model_free`. It never changes once created, so it may be read by
+ * several threads at once.
+ */
+typedef struct HystcompModel HystcompModel;
 
 /**
  * A forward MPIM, eq. (4): model input in, model output out (opaque). Useful to check a
  * compensator (`P[C[y_d]] = y_d`) or to predict a plant's displacement.
  *
- * Created by `hystcomp_mpim_from_model_file` (physical units of the model file) or
- * `hystcomp_mpim_from_parameters` (normalised units), released by `hystcomp_mpim_free`.
+ * Created by `hystcomp_mpim_from_model_file` or `hystcomp_mpim_from_model` (physical units of
+ * the model) or `hystcomp_mpim_from_parameters` (normalised units), released by
+ * `hystcomp_mpim_free`.
  */
 typedef struct HystcompMpim HystcompMpim;
+
+/**
+ * What a compensator did to a signal (`hystcomp_compensate`), counted over the signal, and the
+ * limits it used.
+ */
+typedef struct HystcompDiagnostics {
+    /**
+     * Samples whose desired position could not be reached within the limits (clamped).
+     */
+    uint64_t saturated;
+    /**
+     * Samples a delayed loop (`ihc-delayed`, `wihc-delayed`) drove to a limit although the
+     * desired position was reachable: the loop lagged or rang after a jump (0 for the exact
+     * methods and DIHC).
+     */
+    uint64_t loop_saturated;
+    /**
+     * NaN or infinite desired positions (the previous output was held).
+     */
+    uint64_t non_finite;
+    /**
+     * The lower drive limit used, in the model's voltage unit.
+     */
+    double v_min;
+    /**
+     * The upper drive limit used, in the model's voltage unit.
+     */
+    double v_max;
+} HystcompDiagnostics;
+
+/**
+ * The options of `hystcomp_identify`. Start from `hystcomp_identify_options_default` and
+ * change what you need; the defaults are those of the library (and of `hystcomp identify`,
+ * except `holdout`, which the command line sets to 0.2).
+ */
+typedef struct HystcompIdentifyOptions {
+    /**
+     * A `HystcompDirection`: plant (voltage to displacement, for IHC and WIHC; the default) or
+     * inverse (displacement to voltage, for DIHC).
+     */
+    int direction;
+    /**
+     * A `HystcompSolver` (default least squares).
+     */
+    int solver;
+    /**
+     * Play operators `n` at thresholds `(i - 1)/n` of the input range (eq. (11)); default 10,
+     * at most `HYSTCOMP_MAX_OPERATORS`. Ignored when `thresholds` is given.
+     */
+    size_t operators;
+    /**
+     * `threshold_count` thresholds given explicitly (fractions of the input range in
+     * `[0, 1)`, strictly increasing), or NULL for `operators` uniform ones. Read during the
+     * call only.
+     */
+    const double *thresholds;
+    /**
+     * The number of `thresholds` (at most `HYSTCOMP_MAX_OPERATORS`).
+     */
+    size_t threshold_count;
+    /**
+     * Non-zero (the default): the warm-up ends at the first sample within 5 % of the voltage
+     * range from its minimum. Zero: `warmup_samples` leading samples are excluded from the fit.
+     */
+    int warmup_auto;
+    /**
+     * Leading samples excluded from the fit when `warmup_auto` is 0.
+     */
+    size_t warmup_samples;
+    /**
+     * The fraction of the samples after the warm-up, at the end, held out of the fit and
+     * reported separately, in `[0, 1)` (default 0).
+     */
+    double holdout;
+    /**
+     * A `HystcompOffsetMode` (default fit).
+     */
+    int offset_mode;
+    /**
+     * The physical output offset for `HYSTCOMP_OFFSET_MODE_VALUE`.
+     */
+    double offset_value;
+    /**
+     * The smallest branch slope the model keeps (normalised, in `(0, 1)`; default 0.001).
+     */
+    double margin;
+    /**
+     * The largest condition number of the column-scaled regressors (default 1e10).
+     */
+    double max_condition;
+    /**
+     * Non-zero: return the model even when its RMS fit error exceeds 10 % of the output range
+     * (refused by default with `HYSTCOMP_STATUS_IDENTIFICATION_FAILED`).
+     */
+    int accept_poor_fit;
+    /**
+     * Swarm: the seed of its random numbers (default 0).
+     */
+    uint64_t seed;
+    /**
+     * Swarm: particles, 2 to `HYSTCOMP_MAX_PARTICLES` (default 40).
+     */
+    size_t particles;
+    /**
+     * Swarm: iterations, 1 to `HYSTCOMP_MAX_ITERATIONS` (default 200).
+     */
+    size_t iterations;
+    /**
+     * Swarm: non-zero to polish the best particle by least squares.
+     */
+    int polish;
+    /**
+     * Unit of the voltage samples, written to the model (NULL: `"V"`).
+     */
+    const char *voltage_unit;
+    /**
+     * Unit of the displacement samples, written to the model (NULL: `"um"`).
+     */
+    const char *displacement_unit;
+} HystcompIdentifyOptions;
+
+/**
+ * Errors of a model's prediction over a span of samples (`predicted - measured`), in the
+ * output's unit and in % of the fitted output range.
+ */
+typedef struct HystcompErrorStats {
+    /**
+     * Samples in the span (0 when there is none, and every other field NaN).
+     */
+    size_t samples;
+    /**
+     * Root mean square error.
+     */
+    double rms;
+    /**
+     * Largest absolute error.
+     */
+    double max;
+    /**
+     * Mean error (a bias or offset drift).
+     */
+    double mean;
+    /**
+     * The range the percentages refer to (the fitted output range).
+     */
+    double range;
+    /**
+     * `rms` in % of the fitted output range.
+     */
+    double rms_percent;
+    /**
+     * `max` in % of the fitted output range.
+     */
+    double max_percent;
+    /**
+     * The RMS of the error minus its mean, in % of the fitted output range.
+     */
+    double std_percent;
+} HystcompErrorStats;
+
+/**
+ * What `hystcomp_identify` did and how well the model fits (the numbers of the fit report the
+ * model also holds, as JSON, in its `identification_json`).
+ */
+typedef struct HystcompFitReport {
+    /**
+     * Samples in the record (the operators run over all of them).
+     */
+    size_t samples_total;
+    /**
+     * Samples at the start excluded as warm-up.
+     */
+    size_t samples_warmup;
+    /**
+     * Samples the error was minimised over.
+     */
+    size_t samples_fit;
+    /**
+     * Samples at the end held out of the fit.
+     */
+    size_t samples_holdout;
+    /**
+     * The model input's smallest fitted value (physical; normalised to 0).
+     */
+    double input_min;
+    /**
+     * The model input's largest fitted value (physical; normalised to 1).
+     */
+    double input_max;
+    /**
+     * The model output's smallest fitted value (physical).
+     */
+    double output_min;
+    /**
+     * The model output's largest fitted value (physical).
+     */
+    double output_max;
+    /**
+     * The model's output offset: the physical output at normalised output 0.
+     */
+    double output_offset;
+    /**
+     * Errors over the fitted samples.
+     */
+    struct HystcompErrorStats fit;
+    /**
+     * Errors over the held-out samples (`samples` 0 without a hold-out).
+     */
+    struct HystcompErrorStats holdout;
+    /**
+     * The condition number of the column-scaled regressor matrix.
+     */
+    double condition_number;
+    /**
+     * The number of linear constraints of the fit.
+     */
+    size_t constraints;
+    /**
+     * The constraints holding with equality at the answer.
+     */
+    size_t active_constraints;
+    /**
+     * The constraints the answer violates (0 for least squares).
+     */
+    size_t violated_constraints;
+    /**
+     * The smallest branch slope of the model over its input range (normalised).
+     */
+    double min_branch_slope;
+    /**
+     * Wall-clock time of the identification, s.
+     */
+    double elapsed_s;
+} HystcompFitReport;
+
+/**
+ * The physical meaning of a model's normalised input or output (eq. (11)):
+ * `physical = offset + scale * normalised`.
+ *
+ * In `HystcompModelValues` given to `hystcomp_model_from_values`, the strings are read during
+ * the call only. Filled in by `hystcomp_model_values`, they point into the model and stay valid
+ * until it is freed.
+ */
+typedef struct HystcompScale {
+    /**
+     * What the signal is, e.g. `"voltage"` (UTF-8, NUL-terminated; may be empty).
+     */
+    const char *quantity;
+    /**
+     * Its unit, e.g. `"V"` or `"um"` (UTF-8, NUL-terminated, not blank).
+     */
+    const char *unit;
+    /**
+     * The physical value at normalised 0, in `unit` (finite).
+     */
+    double offset;
+    /**
+     * The physical span of one normalised unit, in `unit` (finite, > 0).
+     */
+    double scale;
+} HystcompScale;
+
+/**
+ * A model as values: everything a model file holds (see `crates/io/src/model_file.rs`).
+ *
+ * The MPIM of eq. (4) in normalised units, `y = a1 x^3 + a2 x + sum b_i F_{r_i}[x]`, plus the
+ * physical scales of its input and output and the direction it maps.
+ *
+ * Filled in by `hystcomp_model_values` (every pointer then points into the model and stays
+ * valid until it is freed), read by `hystcomp_model_from_values` (every pointer read during the
+ * call only).
+ */
+typedef struct HystcompModelValues {
+    /**
+     * A `HystcompDirection`.
+     */
+    int direction;
+    /**
+     * The model input's physical meaning (a voltage for a plant model).
+     */
+    struct HystcompScale input;
+    /**
+     * The model output's physical meaning (a displacement for a plant model).
+     */
+    struct HystcompScale output;
+    /**
+     * The normalised input range the model was identified on and is invertible on
+     * (`[0, 1]` when the thresholds are fractions of the input range): its lower end.
+     */
+    double input_range_min;
+    /**
+     * The upper end of the normalised input range (`> input_range_min`).
+     */
+    double input_range_max;
+    /**
+     * `operators` thresholds `r_i` (normalised, `>= 0`, increasing).
+     */
+    const double *thresholds;
+    /**
+     * `operators` weights `b_i` (normalised).
+     */
+    const double *weights;
+    /**
+     * The number of play operators `n` (>= 1).
+     */
+    size_t operators;
+    /**
+     * The cubic coefficient `a1` of the input function.
+     */
+    double a1;
+    /**
+     * The linear coefficient `a2` of the input function.
+     */
+    double a2;
+    /**
+     * A line for people, or NULL.
+     */
+    const char *description;
+    /**
+     * How the model was obtained, as JSON text (the model file's `identification` field; for
+     * an identified model the fit report of `hystcomp_identify`), or NULL. An empty string is
+     * read as NULL.
+     */
+    const char *identification_json;
+} HystcompModelValues;
 
 #ifdef __cplusplus
 extern "C" {
 #endif // __cplusplus
+
+/**
+ * Creates a compensator from a model in memory, in its physical units: desired position in,
+ * drive voltage out. As `hystcomp_compensator_from_model_file`, without the file: `method` is
+ * `"ihc"`, `"ihc-delayed"`, `"wihc"`, `"wihc-delayed"` (plant models) or `"dihc"` (inverse
+ * models); with `use_limits != 0` the drive limits are `[v_min, v_max]` (the model's voltage
+ * unit), otherwise the range the model was identified on. The model may be freed after.
+ *
+ * Fails with `NULL_POINTER`, `INVALID_ARGUMENT` (unknown method, limits), `WRONG_DIRECTION`
+ * or `NOT_INVERTIBLE` (over the limits).
+ *
+ * # Safety
+ * `m` must be a live model handle or NULL; `method` a NUL-terminated string or NULL; `out`
+ * valid for one write or NULL.
+ */
+int hystcomp_compensator_from_model(const struct HystcompModel *m,
+                                    const char *method,
+                                    double v_min,
+                                    double v_max,
+                                    int use_limits,
+                                    struct HystcompCompensator **out);
+
+/**
+ * One-shot compensation: the drive `v[k]` for every desired position `y_d[k]` of a whole
+ * trajectory, from the initial state (zero operator memory, eq. (1)), as a compensator made by
+ * `hystcomp_compensator_from_model` and run by `hystcomp_compensator_process` would give.
+ * `y_d` and `v` may be the same array (in place). Every `v[k]` lies within the limits and is
+ * never NaN.
+ *
+ * - `y_d_len` and `v_len` must be equal and not 0.
+ * - `diagnostics`: receives the counts over the signal and the limits used (also when the
+ *   status is `NON_FINITE_INPUT`), or NULL when not wanted.
+ *
+ * Fails with `NULL_POINTER`, `INVALID_ARGUMENT` (lengths differ or 0, unknown method, limits),
+ * `WRONG_DIRECTION` or `NOT_INVERTIBLE` (then `v` is not written), or `NON_FINITE_INPUT` (the
+ * whole signal was processed, NaN or infinite samples holding the previous output; the message
+ * gives their count and the first index).
+ *
+ * # Safety
+ * `m` must be a live model handle or NULL; `method` a NUL-terminated string or NULL; `y_d`
+ * must point to `y_d_len` readable doubles and `v` to `v_len` writable doubles (or be NULL);
+ * `diagnostics` valid for one write or NULL.
+ */
+int hystcomp_compensate(const struct HystcompModel *m,
+                        const char *method,
+                        double v_min,
+                        double v_max,
+                        int use_limits,
+                        const double *y_d,
+                        size_t y_d_len,
+                        double *v,
+                        size_t v_len,
+                        struct HystcompDiagnostics *diagnostics);
 
 /**
  * Creates a compensator from a model file, in the file's physical units: desired position in
@@ -271,6 +741,101 @@ int hystcomp_compensator_delayed_loop_gain(const struct HystcompCompensator *h, 
 void hystcomp_compensator_free(struct HystcompCompensator *h);
 
 /**
+ * Fills `*options` with the defaults: a plant model, least squares, 10 operators, automatic
+ * warm-up, no hold-out, a fitted output offset, margin 0.001, poor fits refused, the swarm's
+ * 40 particles x 200 iterations from seed 0, units V and um.
+ *
+ * Fails with `NULL_POINTER`.
+ *
+ * # Safety
+ * `options` must be valid for one write or NULL.
+ */
+int hystcomp_identify_options_default(struct HystcompIdentifyOptions *options);
+
+/**
+ * Identifies a modified Prandtl-Ishlinskii model (eq. (4)) from a record of drive voltages and
+ * measured displacements, as `hystcomp identify` does (`crates/identify`): the thresholds of
+ * eq. (11) on the fitted input range, the RMS error minimised under the constraints that keep
+ * the model invertible, the fit checked.
+ *
+ * - `voltage`, `voltage_len`, `displacement`, `displacement_len`: the record, one pair per
+ *   sample: equal lengths, not empty, finite, not constant. The model's input is the voltage
+ *   for a plant model and the displacement for an inverse one.
+ * - `options`: NULL for the defaults (`hystcomp_identify_options_default`).
+ * - `out`: receives the model (NULL on failure); its `identification_json` holds the whole fit
+ *   report. Free it with `hystcomp_model_free`.
+ * - `report`: receives the fit report's numbers, or NULL when not wanted.
+ *
+ * Fails with `NULL_POINTER`, `INVALID_ARGUMENT` (lengths differ, empty, NaN, constant, too few
+ * samples for the model, an option out of range; the message names it) or
+ * `IDENTIFICATION_FAILED` (no model fits; the message says what to change).
+ *
+ * # Safety
+ * `voltage` and `displacement` must point to `voltage_len` and `displacement_len` readable
+ * doubles (or be NULL); `options` to a `HystcompIdentifyOptions` (or be NULL); `out` and
+ * `report` be valid for one write (or NULL).
+ */
+int hystcomp_identify(const double *voltage,
+                      size_t voltage_len,
+                      const double *displacement,
+                      size_t displacement_len,
+                      const struct HystcompIdentifyOptions *options,
+                      struct HystcompModel **out,
+                      struct HystcompFitReport *report);
+
+/**
+ * (D1), corrected (ERRATA item 2): writes `max |y - y_d| / (max y_d - min y_d) * 100` to
+ * `*percent`, `y_d` the desired record and `y` the measured one.
+ *
+ * Fails with `NULL_POINTER` or `INVALID_ARGUMENT`: lengths differ, a record is empty or has
+ * fewer than 2 samples, a sample is NaN or infinite (the message gives its index), the desired
+ * record is constant.
+ *
+ * # Safety
+ * `desired` and `measured` must point to `desired_len` and `measured_len` readable doubles or
+ * be NULL; `percent` valid for one write or NULL.
+ */
+int hystcomp_e_m(const double *desired,
+                 size_t desired_len,
+                 const double *measured,
+                 size_t measured_len,
+                 double *percent);
+
+/**
+ * (D2): writes `sqrt(mean (y - y_d)^2) / (max y_d - min y_d) * 100` to `*percent`.
+ *
+ * Fails as `hystcomp_e_m`.
+ *
+ * # Safety
+ * As `hystcomp_e_m`.
+ */
+int hystcomp_e_rms(const double *desired,
+                   size_t desired_len,
+                   const double *measured,
+                   size_t measured_len,
+                   double *percent);
+
+/**
+ * Eq. (12) (ERRATA item 6): writes to `*percent` the largest vertical width of the `y` versus
+ * `y_d` map, `max y - min y` within one of `bins` equal bins of the desired range, divided by
+ * that range, times 100. `bins` is at least 1 and at most `max(1, len / 10)` (at least 10
+ * samples per bin on average; with fewer, bins hold one sample or none and e_mhe reads low);
+ * `HYSTCOMP_DEFAULT_MHE_BINS` is the usual choice.
+ *
+ * Fails as `hystcomp_e_m`, and with `INVALID_ARGUMENT` for `bins` out of range (the message
+ * gives the largest the records support).
+ *
+ * # Safety
+ * As `hystcomp_e_m`.
+ */
+int hystcomp_e_mhe(const double *desired,
+                   size_t desired_len,
+                   const double *measured,
+                   size_t measured_len,
+                   size_t bins,
+                   double *percent);
+
+/**
  * The message of the most recent failed call on the calling thread (an empty string when no
  * call has failed on it). Never NULL. The string stays valid until the next failed call on the
  * same thread; copy it to keep it.
@@ -286,6 +851,80 @@ const char *hystcomp_status_name(int status);
  * The library's version, e.g. `"0.1.0"`. Never NULL, static.
  */
 const char *hystcomp_version(void);
+
+/**
+ * Reads a model file and validates it (see `crates/io/src/model_file.rs`).
+ *
+ * Fails with `NULL_POINTER`, `IO` (missing file, a directory, no permission) or
+ * `INVALID_MODEL_FILE` (not JSON, another format version, a field missing or invalid).
+ *
+ * # Safety
+ * `path` must be a NUL-terminated string or NULL; `out` valid for one write or NULL.
+ */
+int hystcomp_model_load(const char *path, struct HystcompModel **out);
+
+/**
+ * Writes the model to `path` as a JSON model file, atomically (a temporary file in the same
+ * directory, then a rename): an existing file at `path` is replaced whole or not at all.
+ *
+ * Fails with `NULL_POINTER` or `IO` (the directory does not exist, no permission; the message
+ * names the path).
+ *
+ * # Safety
+ * `m` must be a live model handle or NULL; `path` a NUL-terminated string or NULL.
+ */
+int hystcomp_model_save(const struct HystcompModel *m, const char *path);
+
+/**
+ * Creates a model from its values (see `HystcompModelValues`), validated as a model file is:
+ * finite offsets and scales with `scale > 0`, units not blank, a finite increasing input range,
+ * `operators >= 1` finite thresholds (`>= 0`, increasing) and weights, finite `a1` and `a2`,
+ * the identification (when given) valid JSON. Invertibility is checked where the model is used
+ * (a compensator over its limits).
+ *
+ * Fails with `NULL_POINTER` (the values, a string other than `description` and
+ * `identification_json`, or an array) or `INVALID_ARGUMENT` (the message names the value).
+ *
+ * # Safety
+ * `values` must point to a `HystcompModelValues` whose strings are NUL-terminated (or NULL)
+ * and whose arrays hold `operators` doubles (or are NULL), or be NULL; `out` valid for one
+ * write or NULL.
+ */
+int hystcomp_model_from_values(const struct HystcompModelValues *values,
+                               struct HystcompModel **out);
+
+/**
+ * Fills `*values` with the model's values. Every pointer written (strings, `thresholds`,
+ * `weights`) points into the model and stays valid until `hystcomp_model_free`; copy what you
+ * keep longer. `description` and `identification_json` are NULL when the model has none.
+ *
+ * Fails with `NULL_POINTER`.
+ *
+ * # Safety
+ * `m` must be a live model handle or NULL; `values` valid for one write or NULL.
+ */
+int hystcomp_model_values(const struct HystcompModel *m, struct HystcompModelValues *values);
+
+/**
+ * Creates the forward model of a model in memory, in its physical units (as
+ * `hystcomp_mpim_from_model_file` does for a file): for a plant model, drive voltage in and
+ * displacement out. The memory starts at zero (eq. (1)); the model handle may be freed after.
+ *
+ * Fails with `NULL_POINTER`.
+ *
+ * # Safety
+ * `m` must be a live model handle or NULL; `out` valid for one write or NULL.
+ */
+int hystcomp_mpim_from_model(const struct HystcompModel *m, struct HystcompMpim **out);
+
+/**
+ * Releases a model. NULL is accepted (and ignored); a handle must not be used after, nor freed
+ * twice. Compensators and forward models made from it do not depend on it.
+ *
+ * # Safety
+ * `m` must be a live model handle from this library or NULL.
+ */
+void hystcomp_model_free(struct HystcompModel *m);
 
 /**
  * Creates the forward model of a model file, in its physical units: for a plant model, drive

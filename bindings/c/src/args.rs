@@ -104,6 +104,38 @@ pub(crate) unsafe fn clear_out<H>(out: *mut *mut H) -> Result<(), Failure> {
     Ok(())
 }
 
+/// Moves `value` into a new handle and writes it to `*out`.
+///
+/// # Safety
+/// `out` must be non-NULL and valid for one write (checked by [`clear_out`] before).
+pub(crate) unsafe fn put_handle<H>(out: *mut *mut H, value: H) {
+    let boxed = Box::into_raw(Box::new(value));
+    // SAFETY: non-NULL and valid for a write (the caller's contract).
+    unsafe { out.write(boxed) };
+}
+
+/// The `len` doubles of a signal at `ptr`: NULL and empty signals are refused (`what` names
+/// the signal in the message).
+///
+/// # Safety
+/// As [`doubles`].
+pub(crate) unsafe fn signal<'a>(
+    ptr: *const f64,
+    len: usize,
+    what: &'static str,
+) -> Result<&'a [f64], Failure> {
+    if ptr.is_null() {
+        return Err(Failure::null(what));
+    }
+    if len == 0 {
+        return Err(Failure::invalid(format!(
+            "{what} is empty (length 0); give at least one sample"
+        )));
+    }
+    // SAFETY: forwarded contract.
+    unsafe { doubles(ptr, len, what) }
+}
+
 /// Writes one double to an out-parameter.
 ///
 /// # Safety

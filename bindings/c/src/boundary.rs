@@ -7,6 +7,8 @@ use std::ffi::c_int;
 use std::panic::{AssertUnwindSafe, catch_unwind};
 
 use hystcomp_core::CoreError;
+use hystcomp_identify::IdentifyError;
+use hystcomp_indices::IndexError;
 use hystcomp_io::compensator::CompensatorError;
 use hystcomp_io::model_file::ModelFileError;
 
@@ -65,13 +67,38 @@ impl From<CompensatorError> for Failure {
     }
 }
 
+fn model_file_status(e: &ModelFileError) -> HystcompStatus {
+    match e {
+        ModelFileError::Io { .. } | ModelFileError::Write(_) => HystcompStatus::Io,
+        _ => HystcompStatus::InvalidModelFile,
+    }
+}
+
 impl From<ModelFileError> for Failure {
     fn from(e: ModelFileError) -> Self {
+        Failure::new(model_file_status(&e), e.to_string())
+    }
+}
+
+impl From<IdentifyError> for Failure {
+    fn from(e: IdentifyError) -> Self {
         let status = match &e {
-            ModelFileError::Io { .. } | ModelFileError::Write(_) => HystcompStatus::Io,
-            _ => HystcompStatus::InvalidModelFile,
+            IdentifyError::Data(_) | IdentifyError::InvalidOption { .. } => {
+                HystcompStatus::InvalidArgument
+            }
+            IdentifyError::Core(core) => core_status(core),
+            IdentifyError::ModelFile(file) => model_file_status(file),
+            _ => HystcompStatus::IdentificationFailed,
         };
         Failure::new(status, e.to_string())
+    }
+}
+
+impl From<IndexError> for Failure {
+    fn from(e: IndexError) -> Self {
+        // Every index error is about the arguments: lengths, NaN, a constant desired record,
+        // the number of bins.
+        Failure::invalid(e.to_string())
     }
 }
 

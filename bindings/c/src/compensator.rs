@@ -15,9 +15,9 @@ use crate::boundary::{Failure, boundary};
 
 /// A feedforward compensator: desired position in, drive voltage out (opaque).
 ///
-/// Created by `hystcomp_compensator_from_model_file` (physical units of the model file) or
-/// `hystcomp_compensator_from_parameters` (normalised units), released by
-/// `hystcomp_compensator_free`.
+/// Created by `hystcomp_compensator_from_model_file` or `hystcomp_compensator_from_model`
+/// (physical units of the model) or `hystcomp_compensator_from_parameters` (normalised units),
+/// released by `hystcomp_compensator_free`.
 pub struct HystcompCompensator {
     pub(crate) inner: ScaledCompensator,
 }

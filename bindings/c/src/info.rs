@@ -27,6 +27,7 @@ pub extern "C" fn hystcomp_status_name(status: c_int) -> *const c_char {
         6 => c"model of the wrong direction for the method",
         7 => c"non-finite input sample",
         8 => c"internal error",
+        9 => c"identification failed",
         _ => c"unknown status",
     };
     name.as_ptr()

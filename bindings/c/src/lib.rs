@@ -1,12 +1,21 @@
 //! The C ABI of hystcomp: feedforward hysteresis compensators (IHC, WIHC, DIHC of Gu & Zhu,
 //! *Smart Mater. Struct.* **23** (2014) 095029) and the forward MPIM (eq. (4)) for real-time
-//! controllers programmed in C (dSPACE, Speedgoat, an STM32 with an operating system...).
+//! controllers programmed in C (dSPACE, Speedgoat, an STM32 with an operating system...), and
+//! for the bindings over C (MATLAB/Octave's MEX gateway in `bindings/matlab`): models in
+//! memory, identification from arrays, the tracking indices.
 //!
 //! A thin, safe wrapper: the compensators are `hystcomp_io::compensator::ScaledCompensator`
-//! (physical units, limits in volts) and the forward model is `hystcomp_core::Mpim` scaled by a
-//! model file's `hystcomp_io::model_file::Scale`s. Nothing is re-implemented here.
+//! (physical units, limits in volts), the forward model is `hystcomp_core::Mpim` scaled by a
+//! model file's `hystcomp_io::model_file::Scale`s, a model is a
+//! `hystcomp_io::model_file::ModelFile`, identification is `hystcomp_identify::identify` and the
+//! indices are `hystcomp_indices`. Nothing is re-implemented here.
 //!
-//! The header `include/hystcomp.h` is generated from this file by cbindgen
+//! One module per job: `compensator` and `compensate` (compensators, from files, parameters or
+//! models, and the one-shot compensation), `mpim` (forward models), `model` (models in memory:
+//! files, values), `identify`, `indices`, `info` (messages, version); `boundary` and `args` hold
+//! the checks every entry point shares.
+//!
+//! The header `include/hystcomp.h` is generated from these files by cbindgen
 //! (`bindings/c/cbindgen.toml`) and committed; a test fails when it is stale. Regenerate it with
 //! `HYSTCOMP_UPDATE_HEADER=1 cargo test -p hystcomp-c --test header`.
 //!
@@ -16,9 +25,13 @@
 //! - On failure, `hystcomp_last_error_message()` gives the reason, in English, for people. It is
 //!   **thread-local** and describes the most recent failed call on the calling thread; successful
 //!   calls leave it unchanged.
-//! - Objects are opaque handles (`HystcompCompensator*`, `HystcompMpim*`) created by a
-//!   `*_from_*` function and released by the matching `*_free` (which accepts NULL). A handle
-//!   may be moved between threads but must not be used by two threads at once.
+//! - Objects are opaque handles (`HystcompCompensator*`, `HystcompMpim*`, `HystcompModel*`)
+//!   created by a `*_from_*`, `*_load` or `hystcomp_identify` function and released by the
+//!   matching `*_free` (which accepts NULL). A handle may be moved between threads but must not
+//!   be used by two threads at once (a model, which never changes, may be read by several).
+//! - Arrays come with their lengths; NULL, empty (where a signal is needed), mismatched lengths
+//!   and NaN samples are refused with a status and a message, and every size a caller sets is
+//!   bounded before anything is allocated (`HYSTCOMP_MAX_*`).
 //! - Every pointer is checked: NULL gives `HYSTCOMP_STATUS_NULL_POINTER`. Every entry point
 //!   catches Rust panics, so nothing ever unwinds into C (a caught panic is
 //!   `HYSTCOMP_STATUS_INTERNAL`, a bug to report).
@@ -52,12 +65,20 @@
 
 mod args;
 mod boundary;
+mod compensate;
 mod compensator;
+mod identify;
+mod indices;
 mod info;
+mod model;
 mod mpim;
 
+pub use compensate::*;
 pub use compensator::*;
+pub use identify::*;
+pub use indices::*;
 pub use info::*;
+pub use model::*;
 pub use mpim::*;
 
 /// The status every fallible function returns (as an `int`). `HYSTCOMP_STATUS_OK` is 0; every
@@ -93,6 +114,11 @@ pub enum HystcompStatus {
     /// A Rust panic was caught at the boundary: a bug in hystcomp, please report it with the
     /// message. The handle involved should be freed.
     Internal = 8,
+    /// No model could be identified from the samples with the options given: the displacement
+    /// does not rise with the voltage (a wrong column or sign), the regressors are
+    /// ill-conditioned, the constraints cannot be met, the swarm found no feasible model, or
+    /// the fit's RMS error exceeds its limit. The message says what to change.
+    IdentificationFailed = 9,
 }
 
 /// The compensation methods, for `hystcomp_compensator_from_parameters` (passed as an `int`).

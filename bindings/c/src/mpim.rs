@@ -15,8 +15,9 @@ use crate::boundary::{Failure, boundary};
 /// A forward MPIM, eq. (4): model input in, model output out (opaque). Useful to check a
 /// compensator (`P[C[y_d]] = y_d`) or to predict a plant's displacement.
 ///
-/// Created by `hystcomp_mpim_from_model_file` (physical units of the model file) or
-/// `hystcomp_mpim_from_parameters` (normalised units), released by `hystcomp_mpim_free`.
+/// Created by `hystcomp_mpim_from_model_file` or `hystcomp_mpim_from_model` (physical units of
+/// the model) or `hystcomp_mpim_from_parameters` (normalised units), released by
+/// `hystcomp_mpim_free`.
 pub struct HystcompMpim {
     pub(crate) model: Mpim<f64, Vec<f64>>,
     /// Physical meaning of the input and the output; `None` for normalised units.

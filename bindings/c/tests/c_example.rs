@@ -36,6 +36,12 @@ fn static_library() -> &'static PathBuf {
 /// Compiles `examples/c/{name}.c` against the committed header and the static library, with
 /// every warning an error; the path of the executable.
 fn compile_example(name: &str) -> PathBuf {
+    compile(&format!("examples/c/{name}.c"), name)
+}
+
+/// Compiles the C source `source` (relative to the workspace root) into the executable `name`
+/// in `<target>/c-examples`, as [`compile_example`].
+fn compile(source: &str, name: &str) -> PathBuf {
     let root = workspace_root();
     let library = static_library();
     assert!(
@@ -57,11 +63,11 @@ fn compile_example(name: &str) -> PathBuf {
                 "-pedantic",
             ])
             .args(["-I", "bindings/c/include"])
-            .arg(format!("examples/c/{name}.c"))
+            .arg(source)
             .arg(library)
             .args(["-lpthread", "-ldl", "-lm", "-o"])
             .arg(&program),
-        &format!("examples/c/{name}.c must compile without warnings against the committed header"),
+        &format!("{source} must compile without warnings against the committed header"),
     );
     program
 }
@@ -127,6 +133,19 @@ fn c_round_trip_through_table1_model_is_exact() {
         stdout.contains("NULL handle: null pointer: compensator handle is NULL"),
         "{stdout}"
     );
+}
+
+#[test]
+fn c_program_identifies_saves_loads_compensates_and_scores() {
+    let program = compile("bindings/c/tests/c/models.c", "models");
+    let dir = tempfile::tempdir().expect("a temporary directory");
+    let output = run(
+        Command::new(program).arg(dir.path()),
+        "bindings/c/tests/c/models.c must pass its own checks",
+    );
+    let stdout = String::from_utf8_lossy(&output.stdout);
+    assert!(stdout.starts_with("models OK: fit "), "{stdout}");
+    assert!(dir.path().join("identified.json").is_file());
 }
 
 #[test]
