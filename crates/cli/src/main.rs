@@ -45,6 +45,9 @@ enum Command {
     Identify(commands::identify::Args),
     /// Identify on one record, predict and replay the compensators on another.
     Crossval(commands::crossval::Args),
+    /// Write a test signal as CSV: the study's excitation, the paper's trajectory, rasters,
+    /// steps, multisines, chirps.
+    Signal(commands::signal::Args),
     /// Drive the simulated stage with a voltage record.
     Simulate(commands::simulate::Args),
     /// Reproduce the paper's comparative study on the simulated stage.
@@ -68,6 +71,32 @@ pub fn print_json<T: serde::Serialize>(value: &T) -> Result<(), CliError> {
 
 /// Runs one subcommand: refuses outputs that name one of its inputs, before anything is read,
 /// then runs it.
+/// A number for people: four significant digits, trailing zeros trimmed (`9.602`, `0.3346`,
+/// `10000`), scientific notation below 1e-4 and from 1e7; JSON keeps full precision.
+pub fn number(v: f64) -> String {
+    if !v.is_finite() {
+        return v.to_string();
+    }
+    if v == 0.0 {
+        return "0".into();
+    }
+    let magnitude = v.abs().log10().floor() as i32;
+    if !(-4..7).contains(&magnitude) {
+        return format!("{v:.3e}");
+    }
+    let decimals = (3 - magnitude).max(0) as usize;
+    let text = format!("{v:.decimals$}");
+    let text = if text.contains('.') {
+        text.trim_end_matches('0').trim_end_matches('.')
+    } else {
+        &text
+    };
+    match text {
+        "-0" => "0".into(),
+        t => t.into(),
+    }
+}
+
 fn run<A: NamesFiles>(
     args: &A,
     ctx: Context,
@@ -85,6 +114,7 @@ fn main() -> ExitCode {
         Command::Bench(args) => run(args, ctx, commands::bench::run),
         Command::Identify(args) => run(args, ctx, commands::identify::run),
         Command::Crossval(args) => run(args, ctx, commands::crossval::run),
+        Command::Signal(args) => run(args, ctx, commands::signal::run),
         Command::Simulate(args) => run(args, ctx, commands::simulate::run),
         Command::Reproduce(args) => run(args, ctx, commands::reproduce::run),
         Command::Evaluate(args) => run(args, ctx, commands::evaluate::run),

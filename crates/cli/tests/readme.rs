@@ -1,5 +1,6 @@
-//! The README's command-line block runs as written, line by line, in a fresh directory that
-//! holds the three input files it names.
+//! The README's command-line block runs as written, line by line, in an empty directory (it
+//! makes its inputs with `hystcomp signal`), and its last `evaluate` prints figures within the
+//! band the README states.
 
 mod common;
 
@@ -7,11 +8,6 @@ use std::path::Path;
 use std::process::Command;
 
 use common::{s, stderr, stdout};
-use hystcomp_experiments::Reference;
-use hystcomp_experiments::excitation::IdentificationExcitation;
-use hystcomp_io::data::write_csv;
-
-const SAMPLE_RATE_HZ: f64 = 10_000.0;
 
 /// The commands of the ```sh block under "## The command line", comments removed.
 fn readme_commands() -> Vec<Vec<String>> {
@@ -34,51 +30,31 @@ fn readme_commands() -> Vec<Vec<String>> {
         .collect()
 }
 
-/// A record's command voltage at the stage's rate, as `time_s, command_v`.
-fn write_volts(path: &Path, excitation: &IdentificationExcitation) {
-    let command = excitation.command_v(SAMPLE_RATE_HZ);
-    let time: Vec<f64> = (0..command.len())
-        .map(|k| k as f64 / SAMPLE_RATE_HZ)
-        .collect();
-    write_csv(path, &["time_s", "command_v"], &[&time, &command]).unwrap();
+/// `name = value %` from evaluate's text output.
+fn percent(text: &str, name: &str) -> f64 {
+    let line = text
+        .lines()
+        .find(|l| l.starts_with(name))
+        .unwrap_or_else(|| panic!("no {name} in {text}"));
+    line.split('=')
+        .nth(1)
+        .unwrap()
+        .split('%')
+        .next()
+        .unwrap()
+        .trim()
+        .parse()
+        .unwrap()
 }
 
 #[test]
-fn the_readme_command_line_block_runs_as_written() {
+fn the_readme_command_line_block_runs_as_written_and_scores_within_its_band() {
     let commands = readme_commands();
-    assert!(commands.len() >= 8, "too few commands: {commands:?}");
+    assert!(commands.len() >= 12, "too few commands: {commands:?}");
+    // An empty directory: the block makes every input it uses itself.
     let dir = tempfile::tempdir().unwrap();
     let here = dir.path();
-
-    // The inputs the README names: an excitation, a second record, a desired trajectory.
-    let short = IdentificationExcitation {
-        multisine_s: 6.0,
-        ..IdentificationExcitation::default()
-    };
-    write_volts(&here.join("volts.csv"), &short);
-    let other = IdentificationExcitation {
-        segment_s: 0.5,
-        multisine_s: 4.0,
-        ..IdentificationExcitation::default()
-    };
-    write_volts(&here.join("check-volts.csv"), &other);
-    let check = Command::new(env!("CARGO_BIN_EXE_hystcomp"))
-        .current_dir(here)
-        .args(["simulate", "--input", "check-volts.csv", "-o", "check.csv"])
-        .args(["--seed", "9"])
-        .output()
-        .unwrap();
-    assert!(check.status.success(), "{}", stderr(&check));
-    let (time, desired) = Reference::paper()
-        .trajectory()
-        .sample(SAMPLE_RATE_HZ, 30_000);
-    write_csv(
-        &here.join("desired.csv"),
-        &["time_s", "desired_um"],
-        &[&time, &desired],
-    )
-    .unwrap();
-
+    let mut evaluated = false;
     for command in &commands {
         assert_eq!(
             command[0], "hystcomp",
@@ -101,8 +77,37 @@ fn the_readme_command_line_block_runs_as_written() {
             assert!(written.is_file(), "{command:?} wrote no {}", s(&written));
         }
         if command[1] == "evaluate" {
-            assert!(stdout(&out).contains("e_mhe"), "{}", stdout(&out));
+            // The band the README states for the last period of the session's IHC.
+            let text = stdout(&out);
+            let (e_mhe, e_m, e_rms) = (
+                percent(&text, "e_mhe"),
+                percent(&text, "e_m "),
+                percent(&text, "e_rms"),
+            );
+            assert!((1.5..=3.5).contains(&e_mhe), "e_mhe {e_mhe}: {text}");
+            assert!((0.5..=2.0).contains(&e_m), "e_m {e_m}: {text}");
+            assert!((0.2..=0.6).contains(&e_rms), "e_rms {e_rms}: {text}");
+            assert!(text.contains("t = 10 .. 20 s"), "{text}");
+            evaluated = true;
         }
     }
+    assert!(evaluated, "the block ends with an evaluate");
     assert!(here.join("report/index.html").is_file());
+}
+
+#[test]
+fn the_readme_shows_what_evaluate_prints() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
+    let readme = std::fs::read_to_string(root.join("README.md")).unwrap();
+    let section = readme.split("## The command line").nth(1).unwrap();
+    let shown = section
+        .split("```text\n")
+        .nth(1)
+        .and_then(|rest| rest.split("```").next())
+        .expect("the printed indices in a ```text block");
+    for name in ["e_mhe", "e_m ", "e_rms"] {
+        let value = percent(shown, name);
+        assert!(value > 0.0, "{name}");
+    }
+    assert!((1.5..=3.5).contains(&percent(shown, "e_mhe")));
 }

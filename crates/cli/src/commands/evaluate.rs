@@ -35,6 +35,10 @@ pub struct Args {
     /// Rows (samples) to evaluate, FIRST..LAST, 1-based and inclusive (e.g. the last period).
     #[arg(long, value_name = "FIRST..LAST")]
     rows: Option<RowRange>,
+    /// Score only the last PERIOD seconds (the last full period of a periodic trajectory, as
+    /// the paper does: the start from rest is left out). Needs --time-column.
+    #[arg(long, value_name = "SECONDS")]
+    period: Option<f64>,
     /// Number of bins of the y_d range for e_mhe (eq. (12), ERRATA item 6); at most one per
     /// 10 samples evaluated, so that each bin holds enough samples for a width.
     #[arg(long, default_value_t = DEFAULT_MHE_BINS)]
@@ -62,6 +66,8 @@ struct Report {
     /// The measured file's column that was read.
     measured_column: String,
     samples: usize,
+    /// Time of the first and last sample scored, s (with --time-column).
+    scored_s: Option<(f64, f64)>,
     /// Percent of the desired range.
     #[serde(flatten)]
     indices: TrackingIndices,
@@ -116,6 +122,35 @@ fn check_times(desired: &data::Columns, measured: &data::Columns) -> Result<(), 
     Ok(())
 }
 
+/// How many of the last samples make up the last `period` seconds, from the time column
+/// (`values[1]`) of the desired record.
+fn last_period(values: &[Vec<f64>], period: f64, has_time: bool) -> Result<usize, CliError> {
+    if !has_time {
+        return Err(CliError::input(
+            "--period needs --time-column (the time of each sample, s)",
+        ));
+    }
+    if !(period.is_finite() && period > 0.0) {
+        return Err(CliError::input(format!(
+            "--period must be a positive number of seconds, got {period}"
+        )));
+    }
+    let t = &values[1];
+    let span = t.last().copied().unwrap_or(0.0) - t.first().copied().unwrap_or(0.0);
+    let step = if t.len() > 1 {
+        span / (t.len() - 1) as f64
+    } else {
+        0.0
+    };
+    if step.is_nan() || step <= 0.0 || period > span + step * 0.5 {
+        return Err(CliError::input(format!(
+            "--period {period} s is longer than the record ({} s)",
+            crate::number(span + step)
+        )));
+    }
+    Ok(((period / step).round() as usize).clamp(1, t.len()))
+}
+
 /// Runs `hystcomp evaluate`.
 pub fn run(args: &Args, ctx: Context) -> Result<(), CliError> {
     let options = ReadOptions {
@@ -148,7 +183,22 @@ pub fn run(args: &Args, ctx: Context) -> Result<(), CliError> {
     if time.is_some() && desired.len() == measured.len() {
         check_times(&desired, &measured)?;
     }
-    let (d, y) = (&desired.values[0], &measured.values[0]);
+    let (mut d, mut y) = (&desired.values[0][..], &measured.values[0][..]);
+    let mut scored_s = time.map(|_| {
+        let t = &desired.values[1];
+        (
+            t.first().copied().unwrap_or(0.0),
+            t.last().copied().unwrap_or(0.0),
+        )
+    });
+    if let Some(period) = args.period {
+        let keep = last_period(&desired.values, period, time.is_some())?;
+        let start = d.len().saturating_sub(keep);
+        d = &d[start..];
+        y = &y[start.min(y.len())..];
+        let t = &desired.values[1];
+        scored_s = Some((t[start], t[t.len() - 1]));
+    }
     // The indices check the pair (equal lengths, a desired range that is not zero, bins).
     let indices = TrackingIndices::compute(d, y, args.bins).map_err(|e| {
         CliError::from(e).context(format!(
@@ -167,21 +217,26 @@ pub fn run(args: &Args, ctx: Context) -> Result<(), CliError> {
         measured: args.measured.display().to_string(),
         measured_column: measured.names[0].clone(),
         samples: d.len(),
+        scored_s,
         indices,
         desired_range: range,
     };
     if ctx.json {
         crate::print_json(&report)?;
     } else {
+        let scored = match scored_s {
+            Some((a, b)) => format!(", t = {} .. {} s", crate::number(a), crate::number(b)),
+            None => String::new(),
+        };
         outln!(
-            "{} samples, y_d from {:.4} to {:.4}\ne_mhe = {:.3} % ({} bins)\ne_m   = {:.3} %\ne_rms = {:.3} %",
+            "{} samples{scored}, y_d from {} to {} µm\ne_mhe = {} % ({} bins)\ne_m   = {} %\ne_rms = {} %",
             report.samples,
-            range.0,
-            range.1,
-            indices.e_mhe_percent,
+            crate::number(range.0),
+            crate::number(range.1),
+            crate::number(indices.e_mhe_percent),
             indices.mhe_bins,
-            indices.e_m_percent,
-            indices.e_rms_percent
+            crate::number(indices.e_m_percent),
+            crate::number(indices.e_rms_percent)
         )?;
     }
     Ok(())

@@ -6,4 +6,5 @@ pub mod crossval;
 pub mod evaluate;
 pub mod identify;
 pub mod reproduce;
+pub mod signal;
 pub mod simulate;
