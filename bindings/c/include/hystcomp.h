@@ -628,7 +628,7 @@ int hystcomp_compensator_from_model_file(const char *path,
  *   IHC and WIHC check invertibility over them.
  * - `out`: receives the handle (NULL on failure).
  *
- * Fails with `NULL_POINTER`, `INVALID_ARGUMENT` (n = 0, NaN, unsorted thresholds, limits,
+ * Fails with `NULL_POINTER`, `INVALID_ARGUMENT` (n = 0 or above 10000, NaN, unsorted thresholds, limits,
  * unknown method) or `NOT_INVERTIBLE`.
  *
  * # Safety
@@ -940,8 +940,8 @@ int hystcomp_mpim_from_model_file(const char *path, struct HystcompMpim **out);
 
 /**
  * Creates a forward model from its parameters, in normalised units (eq. (4)):
- * `y = a1 x^3 + a2 x + sum b_i F_{r_i}[x]`. `n >= 1` thresholds (`>= 0`, increasing) and
- * weights, all finite.
+ * `y = a1 x^3 + a2 x + sum b_i F_{r_i}[x]`. `1 <= n <= 10000` thresholds (`>= 0`,
+ * increasing) and weights, all finite.
  *
  * Fails with `NULL_POINTER` or `INVALID_ARGUMENT`.
  *

@@ -3,7 +3,7 @@
 use std::ffi::{CStr, c_char};
 use std::path::PathBuf;
 
-use hystcomp_io::model_file::Scale;
+use hystcomp_io::model_file::{MAX_OPERATORS, Scale};
 
 use crate::HystcompStatus;
 use crate::boundary::Failure;
@@ -215,7 +215,8 @@ pub(crate) fn normalised_scale(quantity: &str) -> Scale {
     }
 }
 
-/// Reads `n` operators' thresholds and weights.
+/// Reads `n` operators' thresholds and weights (1 to `MAX_OPERATORS`, 10 000, checked before
+/// anything is read).
 ///
 /// # Safety
 /// As [`doubles`] for both arrays.
@@ -228,6 +229,11 @@ pub(crate) unsafe fn parameters<'a>(
         return Err(Failure::invalid(
             "n = 0: a model needs at least one play operator (the paper uses 10)",
         ));
+    }
+    if n > MAX_OPERATORS {
+        return Err(Failure::invalid(format!(
+            "n = {n}: a model holds at most {MAX_OPERATORS} play operators (the paper uses 10)"
+        )));
     }
     // SAFETY: forwarded contract.
     let thresholds = unsafe { doubles(thresholds, n, "thresholds") }?;

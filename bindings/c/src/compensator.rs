@@ -77,7 +77,7 @@ pub unsafe extern "C" fn hystcomp_compensator_from_model_file(
 ///   IHC and WIHC check invertibility over them.
 /// - `out`: receives the handle (NULL on failure).
 ///
-/// Fails with `NULL_POINTER`, `INVALID_ARGUMENT` (n = 0, NaN, unsorted thresholds, limits,
+/// Fails with `NULL_POINTER`, `INVALID_ARGUMENT` (n = 0 or above 10000, NaN, unsorted thresholds, limits,
 /// unknown method) or `NOT_INVERTIBLE`.
 ///
 /// # Safety

@@ -55,8 +55,8 @@ pub unsafe extern "C" fn hystcomp_mpim_from_model_file(
 }
 
 /// Creates a forward model from its parameters, in normalised units (eq. (4)):
-/// `y = a1 x^3 + a2 x + sum b_i F_{r_i}[x]`. `n >= 1` thresholds (`>= 0`, increasing) and
-/// weights, all finite.
+/// `y = a1 x^3 + a2 x + sum b_i F_{r_i}[x]`. `1 <= n <= 10000` thresholds (`>= 0`,
+/// increasing) and weights, all finite.
 ///
 /// Fails with `NULL_POINTER` or `INVALID_ARGUMENT`.
 ///

@@ -365,6 +365,52 @@ fn zero_operators_and_zero_length_signals() {
     unsafe { hystcomp_compensator_free(h) };
 }
 
+/// Issue 13: every size C can pass is bounded before anything is allocated or read: at most
+/// 10 000 operators (a model of 10^9 would allocate tens of GB).
+#[test]
+fn operator_counts_beyond_the_bound_are_refused_before_reading() {
+    let n = 10_001;
+    let thresholds: Vec<f64> = (0..n).map(|i| i as f64 / n as f64).collect();
+    let weights = vec![1e-5; n];
+    let err = from_parameters(
+        &thresholds,
+        &weights,
+        0.0,
+        1.0,
+        HystcompMethod::Ihc,
+        (0.0, 1.0),
+    )
+    .unwrap_err();
+    assert_eq!(err.0, INVALID_ARGUMENT);
+    assert!(
+        err.1.contains("n = 10001") && err.1.contains("10000"),
+        "{}",
+        err.1
+    );
+    for n in [n, 1 << 40] {
+        let mut model = null_mut();
+        // SAFETY: for n = 10 001 the arrays hold n doubles; for 2^40 they do not, and the
+        // function must refuse n before it reads them (what this checks).
+        let status = unsafe {
+            hystcomp_mpim_from_parameters(
+                thresholds.as_ptr(),
+                weights.as_ptr(),
+                n,
+                0.0,
+                1.0,
+                &mut model,
+            )
+        };
+        assert_eq!(status, INVALID_ARGUMENT, "n = {n}");
+        assert!(model.is_null());
+        assert!(
+            last_error().contains(&format!("n = {n}")),
+            "{}",
+            last_error()
+        );
+    }
+}
+
 #[test]
 fn nan_and_invalid_parameters_are_refused_with_the_reason() {
     let r = TABLE1.thresholds;

@@ -10,6 +10,7 @@
 
 #[macro_use]
 mod out;
+mod bounds;
 mod commands;
 mod error;
 mod files;

@@ -400,7 +400,7 @@ fn bench_reports_every_compensator_for_10_and_100_operators() {
     assert_eq!(report["repeats"], 3);
     let o = hystcomp(&["bench", "--samples", "10"]);
     assert!(!o.status.success());
-    assert!(stderr(&o).contains("--samples must be at least 100"));
+    assert!(stderr(&o).contains("--samples 10: give 100 to 1000000"));
 }
 
 #[test]

@@ -76,6 +76,11 @@ impl IdentificationExcitation {
         }
     }
 
+    /// The excitation's duration, s: the reversal moves, the lead-in and the multisine.
+    pub fn duration_s(&self) -> f64 {
+        REVERSALS.len() as f64 * self.segment_s + self.lead_s + self.multisine_s
+    }
+
     /// The command, V, sampled at `sample_rate_hz`, from rest.
     pub fn command_v(&self, sample_rate_hz: f64) -> Vec<f64> {
         let per_segment = ((self.segment_s * sample_rate_hz).round() as usize).max(1);

@@ -315,6 +315,41 @@ impl Study {
     }
 }
 
+/// The most samples the study simulates in one run (5 000 000): the identification
+/// excitation (43 s by default) and each tracking run (10 s per period) at the stage's
+/// `sample_rate_hz`. About 1 GB of memory at the bound; 10 kHz and 2 periods take 430 000 and
+/// 200 000 samples.
+pub const MAX_STUDY_RUN_SAMPLES: usize = 5_000_000;
+
+/// Refuses a stage rate and study length whose runs exceed [`MAX_STUDY_RUN_SAMPLES`], before
+/// anything is allocated.
+fn check_run_lengths(options: &StudyOptions) -> Result<(), StudyError> {
+    let fs = options.stage.sample_rate_hz;
+    let period_s = Reference::paper().trajectory.period_s;
+    for (what, duration_s) in [
+        (
+            "identification excitation".to_owned(),
+            options.excitation.duration_s(),
+        ),
+        (
+            format!("tracking run of {} periods", options.periods),
+            options.periods as f64 * period_s,
+        ),
+    ] {
+        let samples = duration_s * fs;
+        if !(samples.is_finite() && samples <= MAX_STUDY_RUN_SAMPLES as f64) {
+            return Err(StudyError::Option(format!(
+                "the study's {what} lasts {duration_s} s, which at sample_rate_hz = {fs} Hz is \
+                 {samples:.0} samples, more than the {MAX_STUDY_RUN_SAMPLES} the study simulates \
+                 in one run; lower sample_rate_hz in the stage file (at most {:.0} Hz here) or \
+                 the number of periods",
+                MAX_STUDY_RUN_SAMPLES as f64 / duration_s
+            )));
+        }
+    }
+    Ok(())
+}
+
 /// Runs the study. Deterministic for given options: the same seeds give the same numbers.
 pub fn run_study(
     options: &StudyOptions,
@@ -341,6 +376,7 @@ pub fn run_study(
     }
     options.stage.validate()?;
     let fs = options.stage.sample_rate_hz;
+    check_run_lengths(options)?;
     let full_scale = options.stage.full_scale_command_v();
 
     // 1. Identification experiment.

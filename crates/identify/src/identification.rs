@@ -7,7 +7,9 @@ use hystcomp_io::data::{check_finite, check_min_samples, check_not_constant, che
 use hystcomp_io::model_file::{Direction, ModelFile, Scale};
 use serde::{Deserialize, Serialize};
 
-use crate::options::{AUTO_WARMUP_LEVEL, MIN_CORRELATION, SAMPLES_PER_PARAMETER};
+use crate::options::{
+    AUTO_WARMUP_LEVEL, MAX_REGRESSOR_VALUES, MIN_CORRELATION, SAMPLES_PER_PARAMETER,
+};
 use crate::report::{ErrorStats, FitReport, SampleCounts, SignalRange};
 use crate::{
     FitProblem, IdentifyError, IdentifyOptions, LeastSquares, Method, NoObserver, Observer,
@@ -100,6 +102,19 @@ pub fn identify_observed(
     let fit_offset = options.offset == OutputOffset::Fit;
     let parameters_count = parameter_count(&thresholds, fit_offset);
     let total = input.len();
+    if total.saturating_mul(thresholds.len()) > MAX_REGRESSOR_VALUES {
+        return Err(IdentifyError::InvalidOption {
+            option: "number of play operators",
+            value: thresholds.len().to_string(),
+            reason: format!(
+                "{} operators on {total} samples take {} values, more than the \
+                 {MAX_REGRESSOR_VALUES} identification may hold; use fewer operators or fewer \
+                 samples (a row range, or decimate the record)",
+                thresholds.len(),
+                total.saturating_mul(thresholds.len())
+            ),
+        });
+    }
     let warmup = match options.warmup {
         Warmup::Auto => auto_warmup(voltage),
         Warmup::Samples(n) => n.min(total),

@@ -36,6 +36,15 @@ pub const MIN_CORRELATION: f64 = 0.5;
 /// [`IdentifyOptions::max_fit_rms_percent`].
 pub const DEFAULT_MAX_FIT_RMS_PERCENT: f64 = 10.0;
 
+/// The most play operators identification fits (1000): the least-squares problem and its
+/// checks grow with the square of the operators (1000 operators: about 12 s and 55 MB on the
+/// DBO record; 5000 took 2 GB).
+pub const MAX_OPERATORS: usize = 1_000;
+
+/// The most values the model's operator outputs over the record may take, samples times
+/// operators (5e7, 400 MB of `f64`): checked before they are computed.
+pub const MAX_REGRESSOR_VALUES: usize = 50_000_000;
+
 /// At least this many fitting samples per parameter of the model.
 pub const SAMPLES_PER_PARAMETER: usize = 3;
 
@@ -67,6 +76,14 @@ impl Thresholds {
                 value: "0".to_owned(),
                 reason: "give at least 1 (the paper uses 10)".to_owned(),
             }),
+            Thresholds::Uniform(n) if *n > MAX_OPERATORS => Err(IdentifyError::InvalidOption {
+                option: "number of play operators",
+                value: n.to_string(),
+                reason: format!(
+                    "give at most {MAX_OPERATORS} (the paper uses 10; the fit's cost grows with \
+                     the square of the operators)"
+                ),
+            }),
             Thresholds::Uniform(n) => Ok((0..*n).map(|i| i as f64 / *n as f64).collect()),
             Thresholds::Given(values) => {
                 let text = values
@@ -76,6 +93,12 @@ impl Thresholds {
                     .join(",");
                 if values.is_empty() {
                     return Err(invalid(text, "give at least one threshold"));
+                }
+                if values.len() > MAX_OPERATORS {
+                    return Err(invalid(
+                        format!("{} thresholds", values.len()),
+                        &format!("give at most {MAX_OPERATORS} thresholds"),
+                    ));
                 }
                 if values
                     .iter()

@@ -48,6 +48,13 @@ use serde::{Deserialize, Serialize};
 use crate::ls::{FEASIBILITY_TOLERANCE, finish, polish_from};
 use crate::{FitProblem, IdentifyError, Observer, Progress, Solution, Solver};
 
+/// The most particles a swarm may have (1000): each particle holds its position, velocity and
+/// best position, and every one is evaluated on the whole record each iteration.
+pub const MAX_PARTICLES: usize = 1_000;
+
+/// The most iterations a swarm may run (100 000).
+pub const MAX_ITERATIONS: usize = 100_000;
+
 /// Clerc & Kennedy's constriction factor `chi = 0.7298` for `phi = 4.1`, used as the inertia.
 pub const CONSTRICTION_INERTIA: f64 = 0.7298;
 /// `chi * phi / 2 = 1.49445`, used for both acceleration coefficients.
@@ -196,18 +203,18 @@ impl PsoOptions {
 
     /// Checks every setting.
     pub fn validate(&self) -> Result<(), IdentifyError> {
-        if self.particles < 2 {
+        if !(2..=MAX_PARTICLES).contains(&self.particles) {
             return Err(invalid(
                 "particles",
                 self.particles.to_string(),
-                "a swarm needs at least 2 particles (the default is 40)",
+                &format!("a swarm has 2 to {MAX_PARTICLES} particles (the default is 40)"),
             ));
         }
-        if self.iterations == 0 {
+        if !(1..=MAX_ITERATIONS).contains(&self.iterations) {
             return Err(invalid(
                 "iterations",
-                "0".to_owned(),
-                "give at least 1 iteration (the default is 200)",
+                self.iterations.to_string(),
+                &format!("give 1 to {MAX_ITERATIONS} iterations (the default is 200)"),
             ));
         }
         let [w0, w1] = self.inertia;

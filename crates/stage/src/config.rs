@@ -367,6 +367,10 @@ fn count(field: &'static str, n: u32, lo: u32, hi: u32) -> Result<(), StageError
     }
 }
 
+/// The highest `sample_rate_hz` a stage file may give (1 MHz): every simulated second takes
+/// this many samples of each signal.
+pub const MAX_SAMPLE_RATE_HZ: f64 = 1e6;
+
 impl StageConfig {
     /// Parses a stage file and checks every value. An empty text gives the built-in default.
     pub fn from_toml_str(text: &str) -> Result<StageConfig, StageError> {
@@ -409,6 +413,13 @@ impl StageConfig {
     /// Checks every value; the error names the first offending field.
     pub fn validate(&self) -> Result<(), StageError> {
         positive("sample_rate_hz", self.sample_rate_hz)?;
+        within(
+            "sample_rate_hz",
+            self.sample_rate_hz,
+            0.0,
+            MAX_SAMPLE_RATE_HZ,
+            "at most 1e6 Hz (a piezo stage's controller samples at 1 to 100 kHz)",
+        )?;
         for (name, c) in [("dac", &self.dac), ("adc", &self.adc)] {
             let (bits, span) = if name == "dac" {
                 ("dac.bits", "dac.min_v..dac.max_v")

@@ -64,6 +64,8 @@ const BAD_FILES: &[(&str, &str, &str)] = &[
     ("sample_rate_hz = 0.0", "sample_rate_hz", "> 0"),
     ("sample_rate_hz = -10000.0", "sample_rate_hz", "> 0"),
     ("sample_rate_hz = nan", "sample_rate_hz", "finite"),
+    ("sample_rate_hz = 1e300", "sample_rate_hz", "at most 1e6 Hz"),
+    ("sample_rate_hz = 1e7", "sample_rate_hz", "at most 1e6 Hz"),
     (
         "[mechanics]\ndamping_ratio = -0.05",
         "mechanics.damping_ratio",

@@ -19,10 +19,10 @@ use crate::{CliError, Context};
 /// Arguments of `hystcomp bench`.
 #[derive(Debug, clap::Args)]
 pub struct Args {
-    /// Samples per timed run.
+    /// Samples per timed run (100 to 1000000).
     #[arg(long, default_value_t = 20_000)]
     samples: usize,
-    /// Timed runs per figure (the median is reported).
+    /// Timed runs per figure, 1 to 1000 (the median is reported).
     #[arg(long, default_value_t = 15)]
     repeats: usize,
     /// Also time this model file (its own operator count): a plant model times the forward
@@ -36,6 +36,12 @@ impl NamesFiles for Args {
         Files::new().maybe_input("--model", self.model.as_ref())
     }
 }
+
+/// Most samples per timed run (`--samples`): each figure holds a few signals of this length.
+const MAX_SAMPLES: usize = 1_000_000;
+
+/// Most timed runs per figure (`--repeats`).
+const MAX_REPEATS: usize = 1_000;
 
 /// One measured figure.
 #[derive(Debug, Clone, Serialize)]
@@ -210,11 +216,18 @@ impl Bench {
 
 /// Runs `hystcomp bench`.
 pub fn run(args: &Args, ctx: Context) -> Result<(), CliError> {
-    if args.samples < 100 || args.repeats == 0 {
-        return Err(CliError::input(
-            "--samples must be at least 100 and --repeats at least 1",
-        ));
-    }
+    crate::bounds::count(
+        "--samples",
+        args.samples,
+        100..=MAX_SAMPLES,
+        "samples per timed run (the default is 20000)",
+    )?;
+    crate::bounds::count(
+        "--repeats",
+        args.repeats,
+        1..=MAX_REPEATS,
+        "timed runs (the default is 15)",
+    )?;
     let user_model = args.model.as_deref().map(ModelFile::load).transpose()?;
     let mut bench = Bench {
         samples: args.samples,

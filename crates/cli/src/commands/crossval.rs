@@ -94,6 +94,7 @@ struct Output<'a> {
 
 /// Runs `hystcomp crossval`.
 pub fn run(args: &Args, ctx: Context) -> Result<(), CliError> {
+    args.fit.check_sizes()?;
     let c = &args.columns;
     let train = load(
         &args.train,

@@ -10,6 +10,7 @@ use hystcomp_io::data::{self, Column, Delimiter, Header, ReadOptions, RowRange};
 use hystcomp_io::model_file::Direction;
 use serde::Serialize;
 
+use crate::bounds;
 use crate::files::{Files, NamesFiles};
 use crate::progress::Bar;
 use crate::{CliError, Context};
@@ -72,7 +73,8 @@ pub struct FitArgs {
     /// (particle swarm, as the paper).
     #[arg(long, default_value = "ls", value_parser = ["ls", "pso"])]
     pub method: String,
-    /// Number of play operators n; thresholds (i - 1)/n of the input range (eq. (11)).
+    /// Number of play operators n (1 to 1000); thresholds (i - 1)/n of the input range
+    /// (eq. (11)).
     #[arg(
         short = 'n',
         long = "operators",
@@ -111,10 +113,10 @@ pub struct FitArgs {
     /// pso: seed of the random numbers (the result is reproducible).
     #[arg(long, default_value_t = 0)]
     pub seed: u64,
-    /// pso: number of particles.
+    /// pso: number of particles (2 to 1000).
     #[arg(long, default_value_t = 40, value_name = "N")]
     pub particles: usize,
-    /// pso: number of iterations.
+    /// pso: number of iterations (1 to 100000).
     #[arg(long, default_value_t = 200, value_name = "N")]
     pub iterations: usize,
     /// pso: inertia weight at the first and last iteration, START,END (linear in between;
@@ -353,6 +355,38 @@ pub fn load(
 }
 
 impl FitArgs {
+    /// Refuses sizes beyond their bounds (operators, particles, iterations), naming the
+    /// option, before any record is read.
+    pub fn check_sizes(&self) -> Result<(), CliError> {
+        use hystcomp_identify::{MAX_ITERATIONS, MAX_OPERATORS, MAX_PARTICLES};
+        bounds::count(
+            "-n/--operators",
+            self.operators,
+            1..=MAX_OPERATORS,
+            "play operators (the paper uses 10; the fit's cost grows with their square)",
+        )?;
+        if let Some(thresholds) = &self.thresholds {
+            bounds::count(
+                "--thresholds",
+                thresholds.len(),
+                1..=MAX_OPERATORS,
+                "thresholds",
+            )?;
+        }
+        bounds::count(
+            "--particles",
+            self.particles,
+            2..=MAX_PARTICLES,
+            "particles (the default is 40)",
+        )?;
+        bounds::count(
+            "--iterations",
+            self.iterations,
+            1..=MAX_ITERATIONS,
+            "iterations (the default is 200)",
+        )
+    }
+
     /// The identification options these arguments describe.
     pub fn options(
         &self,
@@ -561,6 +595,7 @@ pub fn fit_error(error: IdentifyError, path: &Path, loaded: &Loaded) -> CliError
 
 /// Runs `hystcomp identify`.
 pub fn run(args: &Args, ctx: Context) -> Result<(), CliError> {
+    args.fit.check_sizes()?;
     let c = &args.columns;
     let loaded = load(
         &args.data,

@@ -83,10 +83,10 @@ fn now_rfc3339() -> String {
     humantime::format_rfc3339_seconds(std::time::SystemTime::now()).to_string()
 }
 
-/// Most particle swarm iterations `--pso-iterations` accepts.
-const MAX_PSO_ITERATIONS: usize = 100_000;
-/// Most particles `--pso-particles` accepts.
-const MAX_PSO_PARTICLES: usize = 1_000;
+/// Most particle swarm iterations `--pso-iterations` accepts (the library's bound).
+const MAX_PSO_ITERATIONS: usize = hystcomp_identify::MAX_ITERATIONS;
+/// Most particles `--pso-particles` accepts (the library's bound).
+const MAX_PSO_PARTICLES: usize = hystcomp_identify::MAX_PARTICLES;
 
 /// Refuses options the study cannot use, with the flag named and the accepted range.
 fn check_args(args: &Args) -> Result<(), CliError> {
