@@ -16,6 +16,9 @@ use crate::error::StageError;
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct StageConfig {
+    /// Seed of the sensor noise for runs that do not name one (`hystcomp simulate` and
+    /// `hystcomp reproduce` without `--seed`). Default 1.
+    pub seed: u64,
     /// Controller sample rate, Hz. Default 10 kHz: the loop rate of this project's study on the
     /// DS1103 (the paper does not print its rate).
     pub sample_rate_hz: f64,
@@ -38,6 +41,7 @@ pub struct StageConfig {
 impl Default for StageConfig {
     fn default() -> Self {
         StageConfig {
+            seed: 1,
             sample_rate_hz: 10_000.0,
             dac: ConverterConfig::default(),
             amplifier: AmplifierConfig::default(),
@@ -196,7 +200,7 @@ pub struct PreisachConfig {
 impl Default for PreisachConfig {
     fn default() -> Self {
         PreisachConfig {
-            stroke_um: 71.75,
+            stroke_um: 72.27,
             voltage_range_v: [0.0, 150.0],
             reversible_fraction: 0.55,
             reversible_curvature: 0.3,
@@ -244,31 +248,56 @@ impl Default for BoucWenConfig {
     }
 }
 
-/// Creep as a bank of first-order (Kelvin-Voigt) elements acting on the hysteresis output:
-/// time constants `first_time_constant_s * 10^(i / elements_per_decade)`,
-/// `i = 0..=decades * elements_per_decade`, each weighted `percent_per_decade / 100 /
-/// elements_per_decade`. After a step the displacement grows by about `percent_per_decade` %
-/// of the creep-free step per decade of time between the shortest and the longest time constant.
+/// The stack's creep law, acting on the hysteresis output (see `STAGE.md`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum CreepLaw {
+    /// The logarithmic law of piezo creep, `x(t) = x_h (1 + gamma log10(1 + t / t0))` after a
+    /// step of the creep-free displacement `x_h` (Jung & Gweon 2000, regularised at the onset
+    /// time `t0`): a continuous spectrum of time constants that never stops growing. The
+    /// default; no finite bank of exponentials reproduces it exactly.
+    Logarithmic,
+    /// A finite bank of first-order (Kelvin-Voigt) elements at log-spaced time constants,
+    /// `first_time_constant_s * 10^(i / elements_per_decade)`, `i = 0..=decades *
+    /// elements_per_decade`, each weighted `percent_per_decade / 100 / elements_per_decade`:
+    /// the structure of Kuhnen's creep operators, which a model's creep link can copy.
+    KelvinVoigt,
+}
+
+/// Creep acting on the hysteresis output: [`CreepLaw::Logarithmic`] (default) or
+/// [`CreepLaw::KelvinVoigt`]. After a step the displacement grows by about
+/// `percent_per_decade` % of the creep-free step per decade of time.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct CreepConfig {
+    /// `"logarithmic"` (default) or `"kelvin-voigt"`.
+    pub law: CreepLaw,
     /// Drift per decade of time, percent of the creep-free displacement, in `[0, 10]`.
     pub percent_per_decade: f64,
-    /// Shortest time constant, s.
+    /// Logarithmic law: onset time `t0`, s (the drift is `gamma log10(1 + t / t0)`).
+    pub onset_time_s: f64,
+    /// Logarithmic law: the longest time constant simulated, s; the drift follows the
+    /// logarithm to about a tenth of it (1e6 s: eleven days).
+    pub longest_time_constant_s: f64,
+    /// Kelvin-Voigt law: shortest time constant, s.
     pub first_time_constant_s: f64,
-    /// Decades of time covered (1..=12).
+    /// Kelvin-Voigt law: decades of time covered (1..=12).
     pub decades: u32,
-    /// Elements per decade (1..=10).
+    /// Elements per decade of time constants (1..=10): the Kelvin-Voigt bank's, or the
+    /// logarithmic law's quadrature nodes.
     pub elements_per_decade: u32,
 }
 
 impl Default for CreepConfig {
     fn default() -> Self {
         CreepConfig {
+            law: CreepLaw::Logarithmic,
             percent_per_decade: 1.5,
+            onset_time_s: 0.01,
+            longest_time_constant_s: 1.0e6,
             first_time_constant_s: 0.01,
             decades: 5,
-            elements_per_decade: 2,
+            elements_per_decade: 4,
         }
     }
 }
@@ -464,6 +493,20 @@ impl StageConfig {
         positive("creep.first_time_constant_s", c.first_time_constant_s)?;
         count("creep.decades", c.decades, 1, 12)?;
         count("creep.elements_per_decade", c.elements_per_decade, 1, 10)?;
+        within(
+            "creep.onset_time_s",
+            c.onset_time_s,
+            1e-6,
+            1e3,
+            "in [1e-6, 1e3] s",
+        )?;
+        within(
+            "creep.longest_time_constant_s",
+            c.longest_time_constant_s,
+            c.onset_time_s * 10.0,
+            1e9,
+            "between 10 x creep.onset_time_s and 1e9 s",
+        )?;
 
         let m = &self.mechanics;
         positive("mechanics.resonance_hz", m.resonance_hz)?;

@@ -9,7 +9,7 @@
 //! - rate-independent hysteresis ([`Hysteresis`]): a Preisach model with a smooth asymmetric
 //!   density (default), an asymmetric Bouc-Wen model, or (for tests only) an MPIM read from a
 //!   model file;
-//! - creep: a bank of Kelvin-Voigt elements giving a logarithmic-type drift (about 1.5 % of
+//! - creep: the logarithmic law (or a Kelvin-Voigt bank) giving a drift of about 1.5 % of
 //!   the step per decade of time);
 //! - mechanics: a second-order resonance (800 Hz, damping ratio 0.05) discretised exactly;
 //! - sensor: white noise (5 nm RMS), an optional parabolic non-linearity, ADC quantisation.
@@ -40,7 +40,7 @@ mod mechanics;
 mod stage;
 
 pub use config::{
-    AmplifierConfig, BoucWenConfig, ConverterConfig, CreepConfig, HysteresisConfig,
+    AmplifierConfig, BoucWenConfig, ConverterConfig, CreepConfig, CreepLaw, HysteresisConfig,
     HysteresisModel, MechanicsConfig, MpimConfig, PreisachConfig, SensorConfig, StageConfig,
 };
 pub use error::StageError;

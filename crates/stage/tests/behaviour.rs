@@ -1,8 +1,8 @@
 //! The stage's physics, each property on seeded random configurations where it makes sense.
 
 use hystcomp_stage::{
-    HysteresisModel, RateIndependentHysteresis, Stage, StageConfig, quasi_static_stroke_um,
-    simulate,
+    CreepLaw, HysteresisModel, RateIndependentHysteresis, Stage, StageConfig,
+    quasi_static_stroke_um, simulate,
 };
 use rand::{RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
@@ -97,6 +97,8 @@ fn creep_after_a_step_grows_by_the_configured_percentage_per_decade() {
     for _ in 0..3 {
         let mut config = StageConfig::default();
         let gamma_percent = 0.5 + 2.5 * rng.random::<f64>();
+        config.creep.law = CreepLaw::KelvinVoigt;
+        config.creep.elements_per_decade = 2;
         config.creep.percent_per_decade = gamma_percent;
         config.creep.first_time_constant_s = 0.001;
         config.creep.decades = 5;
@@ -126,6 +128,38 @@ fn creep_after_a_step_grows_by_the_configured_percentage_per_decade() {
         // ...and the half-decade steps agree with a logarithm, not a line or an exponential.
         let half = (at[1] - at[0]) / (at[2] - at[1]);
         assert!((half - 1.0).abs() < 0.05, "{half}");
+    }
+}
+
+#[test]
+fn default_creep_after_a_step_follows_the_logarithmic_law() {
+    let mut rng = ChaCha8Rng::seed_from_u64(10);
+    for _ in 0..3 {
+        let mut config = StageConfig::default();
+        let gamma_percent = 0.5 + 2.5 * rng.random::<f64>();
+        config.creep.percent_per_decade = gamma_percent;
+        config.creep.onset_time_s = 0.005 + 0.05 * rng.random::<f64>();
+        config.mechanics.rigid = true;
+        config.sensor.noise_rms_nm = 0.0;
+        let mut stage = Stage::new(&config, 0).unwrap();
+        let command = 3.0 + 5.0 * rng.random::<f64>();
+        // The true position after the step against x_h (1 + gamma log10(1 + t / t0)), from
+        // 0.3 s on (the slew-limited amplifier takes up to 9 ms to make the step).
+        let marks = [3_162usize, 10_000, 31_623, 100_000];
+        let t0 = config.creep.onset_time_s;
+        let gamma = gamma_percent / 100.0;
+        for k in 1..=100_000usize {
+            let s = stage.step_detailed(command);
+            if marks.contains(&k) {
+                let t = k as f64 / config.sample_rate_hz;
+                let expected = s.hysteresis_um * (1.0 + gamma * (1.0 + t / t0).log10());
+                assert!(
+                    (s.true_position_um - expected).abs() < 0.02 * gamma * s.hysteresis_um,
+                    "t = {t} s: {} vs {expected} um",
+                    s.true_position_um
+                );
+            }
+        }
     }
 }
 

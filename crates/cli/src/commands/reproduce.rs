@@ -22,9 +22,9 @@ pub struct Args {
     #[arg(long, default_value = "report", value_name = "DIR")]
     out: PathBuf,
     /// Seed of the stage noise (identification run; the tracking runs use seed + 1) and of the
-    /// particle swarm.
-    #[arg(long, default_value_t = 1)]
-    seed: u64,
+    /// particle swarm [default: the stage file's `seed`, 1 for the built-in stage].
+    #[arg(long)]
+    seed: Option<u64>,
     /// Particle swarm iterations of the `paper` pipeline (1 to 100000).
     #[arg(long, default_value_t = STUDY_PSO_ITERATIONS)]
     pso_iterations: usize,
@@ -126,10 +126,11 @@ pub fn run(args: &Args, ctx: Context) -> Result<(), CliError> {
         })?,
         None => StageConfig::default(),
     };
+    let seed = args.seed.unwrap_or(stage.seed);
     let mut options = StudyOptions {
         stage,
-        seed: args.seed,
-        pso_seed: args.seed,
+        seed,
+        pso_seed: seed,
         periods: args.periods,
         ..StudyOptions::default()
     };

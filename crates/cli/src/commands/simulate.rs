@@ -35,9 +35,10 @@ pub struct Args {
     #[arg(long, value_name = "COLUMN", default_value = "2")]
     pub voltage_column: Column,
 
-    /// Seed of the sensor noise (the same seed gives the same output).
-    #[arg(long, default_value_t = 0)]
-    pub seed: u64,
+    /// Seed of the sensor noise (the same seed gives the same output) [default: the stage
+    /// file's `seed`, 1 for the built-in stage].
+    #[arg(long)]
+    pub seed: Option<u64>,
 }
 
 impl NamesFiles for Args {
@@ -118,7 +119,7 @@ fn summary(
         "stage": args.stage.as_ref().map(|p| p.display().to_string()),
         "hysteresis_model": config.hysteresis.model,
         "sample_rate_hz": config.sample_rate_hz,
-        "seed": args.seed,
+        "seed": args.seed.unwrap_or(config.seed),
         "samples": time.len(),
         "duration_s": time.len() as f64 / config.sample_rate_hz,
         "columns": ranges,
@@ -156,7 +157,7 @@ pub fn run(args: &Args, ctx: Context) -> Result<(), CliError> {
     data::check_time_increasing(time).map_err(|e| data_error(e).context(args.input.display()))?;
     check_time_step(time, &config, &stage_name).map_err(|e| e.context(args.input.display()))?;
 
-    let mut stage = Stage::new(&config, args.seed)?;
+    let mut stage = Stage::new(&config, args.seed.unwrap_or(config.seed))?;
     let response = stage.run(command_v);
 
     data::write_csv(
