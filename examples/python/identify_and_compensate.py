@@ -46,9 +46,9 @@ def main(argv):
     inverse = hystcomp.identify(volts, sensor_um, direction="inverse", **options)
     for name, fit in (("plant", plant), ("inverse", inverse)):
         report = fit.report
-        print(f"{name:8s} model: fit RMS {report['fit']['rms_percent']:.3f} %, hold-out RMS "
-              f"{report['holdout']['rms_percent']:.3f} % of the output range, smallest branch "
-              f"slope {report['min_branch_slope']:.3f}")
+        print(f"{name:8s} model: fit RMS {report.fit.rms_percent:.3f} %, hold-out RMS "
+              f"{report.holdout.rms_percent:.3f} % of the output range, smallest branch "
+              f"slope {report.min_branch_slope:.3f}")
 
     # A 1 Hz sine over the middle 80 % of the measured range, starting at its bottom, 5 s.
     t = np.arange(0.0, 5.0, 1.0 / SAMPLE_RATE_HZ)
@@ -86,7 +86,7 @@ def main(argv):
           f"{offset_v:+.3f} V on average, which is most of its e_m and e_rms here.")
     for name, compensator in compensators.items():
         print(f"{name}: limits {compensator.limits[0]:.2f}..{compensator.limits[1]:.2f} "
-              f"{compensator.control_unit}, {compensator.diagnostics['saturated']} samples saturated")
+              f"{compensator.control_unit}, {compensator.diagnostics.saturated} samples saturated")
     return 0 if results["IHC"].e_m < 1e-6 < results["linear gain"].e_mhe else 1
 
 

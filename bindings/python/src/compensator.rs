@@ -8,7 +8,6 @@ use hystcomp_io::compensator::{Method, ScaledCompensator};
 use hystcomp_io::model_file::{Direction, ModelFile as IoModelFile, Scale as IoScale};
 use numpy::PyArray1;
 use pyo3::prelude::*;
-use pyo3::types::PyDict;
 
 use crate::arrays::{ArrayIn, array_out, check_finite_scalar, finite_values, pair};
 use crate::errors::{self, invalid};
@@ -177,23 +176,24 @@ impl Compensator {
     }
 
     /// Counters since the last reset:
-    /// ``{"saturated": ..., "loop_saturated": ..., "non_finite": ...}``. ``saturated``: desired
+    /// A ``Diagnostics`` dataclass: ``saturated``, ``loop_saturated``, ``non_finite``. ``saturated``: desired
     /// positions out of reach within the limits (DIHC: outside the inverse model's range), the
     /// drive was clamped; ``loop_saturated``: a delayed loop (``ihc-delayed``, ``wihc-delayed``)
     /// drove the output to a limit although the position was reachable (it lagged or rang);
     /// ``non_finite``: NaN or infinite desired positions (``step`` and ``process`` refuse them,
     /// so this stays 0 here).
     #[getter]
-    fn diagnostics<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
+    fn diagnostics<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
         let d = self.lock().diagnostics();
-        dict(
+        let data = dict(
             py,
             [
                 ("saturated", d.saturated),
                 ("loop_saturated", d.loop_saturated),
                 ("non_finite", d.non_finite),
             ],
-        )
+        )?;
+        crate::model::typed(py, "Diagnostics", data.into_any())
     }
 
     /// For ``"wihc"`` and ``"wihc-delayed"``: the worst-case loop gain of the delayed WIHC over

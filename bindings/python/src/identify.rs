@@ -8,7 +8,7 @@ use pyo3::prelude::*;
 
 use crate::arrays::{ArrayIn, values};
 use crate::errors::{self, invalid};
-use crate::model::{ModelFile, parse_direction, to_python};
+use crate::model::{ModelFile, parse_direction, to_python, typed};
 
 /// `"auto"` or a number of samples.
 #[derive(FromPyObject)]
@@ -29,7 +29,7 @@ pub enum OffsetArg {
 }
 
 /// An identified model: ``.model`` (a ``ModelFile``, physical scales and normalised
-/// parameters), ``.report`` (a dict: fit errors in physical units and % of the output range,
+/// parameters), ``.report`` (a ``FitReport`` dataclass: fit errors in physical units and % of the output range,
 /// sample counts, solver details, smallest branch slope...) and ``.parameters`` (a dict of the
 /// normalised ``a1``, ``a2``, ``weights`` and fitted ``offset``).
 #[pyclass(module = "hystcomp", name = "Identification", frozen)]
@@ -45,10 +45,12 @@ impl Identification {
         ModelFile::wrap(self.inner.model.clone())
     }
 
-    /// The fit report, as a dict.
+    /// The fit report, a ``FitReport`` dataclass with the fields of ``hystcomp identify
+    /// --json``'s report (``.fit.rms_percent``, ``.samples.warmup``, ``.holdout``, ...;
+    /// ``.to_dict()`` for the dict).
     #[getter]
     fn report<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
-        to_python(py, &self.inner.report)
+        typed(py, "FitReport", to_python(py, &self.inner.report)?)
     }
 
     /// The normalised parameters, as a dict.

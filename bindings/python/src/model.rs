@@ -465,6 +465,18 @@ pub fn to_python<'py>(
     json_to_python(py, &text)
 }
 
+/// `value` as the typed report `class` of `hystcomp._reports` (a dataclass with the same
+/// fields as the command line's JSON), through its `from_json`.
+pub fn typed<'py>(
+    py: Python<'py>,
+    class: &str,
+    data: Bound<'py, PyAny>,
+) -> PyResult<Bound<'py, PyAny>> {
+    py.import("hystcomp._reports")?
+        .getattr(class)?
+        .call_method1("from_json", (data,))
+}
+
 /// A dict from `(key, value)` pairs.
 pub fn dict<'py, V: IntoPyObject<'py>>(
     py: Python<'py>,

@@ -5,14 +5,14 @@ use std::path::PathBuf;
 use hystcomp_stage::{ClampCounts, Stage as RustStage, StageConfig, quasi_static_stroke_um};
 use numpy::{PyArray1, PyUntypedArrayMethods};
 use pyo3::prelude::*;
-use pyo3::types::PyDict;
 
 use crate::arrays::{ArrayIn, array_out, check_finite_scalar, finite_values};
 use crate::errors;
 use crate::model::dict;
 
-fn clamps_dict(py: Python<'_>, c: ClampCounts) -> PyResult<Bound<'_, PyDict>> {
-    dict(
+/// The counts as a ``Clamps`` dataclass.
+fn clamps_dict(py: Python<'_>, c: ClampCounts) -> PyResult<Bound<'_, PyAny>> {
+    let data = dict(
         py,
         [
             ("dac_clamped", c.dac_clamped),
@@ -20,7 +20,8 @@ fn clamps_dict(py: Python<'_>, c: ClampCounts) -> PyResult<Bound<'_, PyDict>> {
             ("non_finite", c.non_finite),
             ("adc_clamped", c.adc_clamped),
         ],
-    )
+    )?;
+    crate::model::typed(py, "Clamps", data.into_any())
 }
 
 /// A simulated piezo nanopositioning stage (DAC, amplifier, hysteresis, creep, resonance,
@@ -124,7 +125,7 @@ impl Stage {
     /// ``non_finite`` (NaN or infinite commands) and ``adc_clamped`` (readings beyond the ADC's
     /// span: the measured position saturated).
     #[getter]
-    fn clamps<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
+    fn clamps<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
         clamps_dict(py, self.inner.clamps())
     }
 
@@ -163,7 +164,9 @@ impl Stage {
 /// The response of ``Stage.run`` (python-control style): one entry per command sample.
 ///
 /// ``time[k]`` is when command ``k`` was written; the positions are read one sample period
-/// later. ``inputs`` is ``command_v`` and ``outputs`` is ``measured_position_um``.
+/// later. ``inputs`` is ``command_v`` and ``outputs`` is ``measured_position_um``; the stage's
+/// internal signals are ``amplifier_v`` and ``true_position_um``. It unpacks as ``t, y =
+/// stage.run(volts)``, and ``hystcomp.plot_response(response)`` plots it (matplotlib).
 #[pyclass(module = "hystcomp", name = "StageResponse", frozen)]
 pub struct StageResponse {
     time_s: Py<PyArray1<f64>>,
@@ -220,12 +223,21 @@ impl StageResponse {
 
     /// Samples the stage clamped during this run, by the same keys as ``Stage.clamps``.
     #[getter]
-    fn clamps<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
+    fn clamps<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
         clamps_dict(py, self.clamps)
     }
 
     fn __len__(&self, py: Python<'_>) -> usize {
         self.command_v.bind(py).len()
+    }
+
+    /// Unpacks as ``t, y = stage.run(volts)``: the time and the measured positions.
+    fn __iter__<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        let pair = (
+            self.time_s.clone_ref(py),
+            self.measured_position_um.clone_ref(py),
+        );
+        Ok(pair.into_pyobject(py)?.into_any().try_iter()?.into_any())
     }
 
     fn __repr__(&self, py: Python<'_>) -> String {

@@ -110,10 +110,11 @@ impl StudyResult {
             })
     }
 
-    /// Everything ``hystcomp reproduce --json`` reports, as a dict.
+    /// Everything ``hystcomp reproduce --json`` reports, as a ``StudySummary`` dataclass with
+    /// the same fields (``.to_dict()`` for the dict).
     #[getter]
     fn summary<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
-        to_python(py, &self.summary)
+        crate::model::typed(py, "StudySummary", to_python(py, &self.summary)?)
     }
 
     /// The acceptance checks: a list of ``{"what", "value", "bound", "passed"}``.

@@ -26,9 +26,9 @@ def test_least_squares_recovers_table1_exactly():
     assert (model.a2 + model.weights[0]) * k == pytest.approx(0.4603 + TABLE1_B[0], rel=1e-9)
     np.testing.assert_allclose(model.weights[1:] * k, TABLE1_B[1:], rtol=1e-9)
     report = fit.report
-    assert report["solver"] == "ls"
-    assert report["fit"]["rms_percent"] < 1e-6
-    assert report["samples"]["total"] == len(volts)
+    assert report.solver == "ls"
+    assert report.fit.rms_percent < 1e-6
+    assert report.samples.total == len(volts)
     assert fit.parameters["weights"] == pytest.approx(list(model.weights))
     assert model.identification["solver"] == "ls"
     np.testing.assert_allclose(model.predict(volts), um, atol=1e-6)
@@ -40,12 +40,12 @@ def test_inverse_models_and_options():
     inverse = hystcomp.identify(volts, um, n=5, direction="inverse", holdout=0.25, warmup=100)
     assert inverse.model.direction == "inverse"
     assert len(inverse.model.thresholds) == 5
-    assert inverse.report["samples"]["warmup"] == 100
-    assert inverse.report["holdout"]["samples"] > 0
+    assert inverse.report.samples.warmup == 100
+    assert inverse.report.holdout.samples > 0
     given = hystcomp.identify(volts, um, thresholds=[0.0, 0.25, 0.5], offset="none", voltage_unit="kV")
     np.testing.assert_array_equal(given.model.thresholds, [0.0, 0.25, 0.5])
     assert given.model.input.unit == "kV"
-    assert given.report["offset_mode"] == "none"
+    assert given.report.offset_mode == "none"
 
 
 def test_particle_swarm_is_reproducible_per_seed():
@@ -57,13 +57,13 @@ def test_particle_swarm_is_reproducible_per_seed():
     a = hystcomp.identify(volts, um, seed=7, **fast)
     b = hystcomp.identify(volts, um, seed=7, **fast)
     c = hystcomp.identify(volts, um, seed=8, **fast)
-    assert a.report["fit"]["rms_percent"] > 10.0
-    assert a.report["solver"] == "pso"
+    assert a.report.fit.rms_percent > 10.0
+    assert a.report.solver == "pso"
     # Same seed, same model (the report differs only by its wall-clock time).
     assert a.parameters == b.parameters
     assert a.parameters != c.parameters
     polished = hystcomp.identify(volts, um, seed=7, polish=True, **fast)
-    assert polished.report["fit"]["rms"] <= a.report["fit"]["rms"]
+    assert polished.report.fit.rms <= a.report.fit.rms
 
 
 @pytest.mark.parametrize(
@@ -104,8 +104,8 @@ def test_bad_samples_are_refused_with_the_reason():
 def test_real_micromanipulator_data_give_a_good_invertible_model():
     record = np.loadtxt(DBO_DATA / "Model_Vi_Do.dat")
     fit = hystcomp.identify(record[:, 0], record[:, 4], warmup=200, holdout=0.2)
-    assert fit.report["fit"]["rms_percent"] < 1.5
-    assert fit.report["holdout"]["rms_percent"] < 1.5
+    assert fit.report.fit.rms_percent < 1.5
+    assert fit.report.holdout.rms_percent < 1.5
     assert fit.model.model().check_invertible() > 0
     volts = hystcomp.Ihc(fit.model).process(np.linspace(-115, -80, 400))
     assert 0.0 <= volts.min() and volts.max() <= 3.6

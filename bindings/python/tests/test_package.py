@@ -33,7 +33,7 @@ def test_stubs_describe_every_public_name_of_the_extension():
     assert public - runtime_classes - runtime_functions == constants
     for name, members in classes.items():
         cls = getattr(_hystcomp, name)
-        runtime = {m for m in vars(cls) if not m.startswith("_") or m in ("__len__", "__copy__")}
+        runtime = {m for m in vars(cls) if not m.startswith("_") or m in ("__len__", "__copy__", "__iter__")}
         stubbed = {m for m in members if m != "__init__"}
         assert runtime == stubbed, f"{name}: runtime {sorted(runtime ^ stubbed)} differ from the stub"
 
@@ -82,3 +82,14 @@ def test_every_public_function_of_the_extension_and_package_has_a_docstring():
         assert f"hystcomp.{expected}" in functions, expected
     missing = [name for name, obj in functions.items() if not (obj.__doc__ or "").strip()]
     assert not missing, f"no docstring: {missing}"
+
+
+def test_the_stubs_carry_the_extensions_docstrings():
+    """Editors show the stub: its docstrings are the extension's (tools/stub_docs.py)."""
+    import subprocess
+    import sys
+    from pathlib import Path
+
+    tool = Path(__file__).resolve().parents[1] / "tools" / "stub_docs.py"
+    result = subprocess.run([sys.executable, str(tool), "--check"], capture_output=True, text=True)
+    assert result.returncode == 0, result.stdout + result.stderr

@@ -39,7 +39,7 @@ def test_published_numbers_are_the_papers(study):
 
 def test_summary_models_and_signals(study):
     assert study.passed == all(check["passed"] for check in study.acceptance)
-    assert study.summary["mhe_bins"] == hystcomp.DEFAULT_MHE_BINS
+    assert study.summary.mhe_bins == hystcomp.DEFAULT_MHE_BINS
     models = study.models
     assert models["exact"]["plant"].direction == "plant"
     assert models["paper"]["inverse"].direction == "inverse"

@@ -4,6 +4,7 @@ import numpy as np
 import pytest
 
 import hystcomp
+from conftest import table1_record
 
 
 def test_stage_runs_a_command_signal_into_a_response():
@@ -19,12 +20,11 @@ def test_stage_runs_a_command_signal_into_a_response():
     assert response.time[0] == 0.0
     assert 10.0 < response.true_position_um.max() < 75.0
     assert response.amplifier_v.max() == pytest.approx(135.0, rel=0.02)
-    assert response.clamps == {
-        "dac_clamped": 0,
-        "amplifier_clamped": 0,
-        "non_finite": 0,
-        "adc_clamped": 0,
-    }
+    assert response.clamps == hystcomp.Clamps(dac_clamped=0, amplifier_clamped=0, non_finite=0, adc_clamped=0)
+    # python-control style: unpacks as t, y; plotting is a separate call.
+    t, y = response
+    np.testing.assert_array_equal(t, response.time)
+    np.testing.assert_array_equal(y, response.outputs)
     assert stage.samples == 5000 and stage.time_s == pytest.approx(0.5)
 
 
@@ -65,7 +65,7 @@ def test_stage_refuses_non_finite_commands_and_counts_clamps():
         stage.run([1.0, np.inf])
     assert stage.samples == 0
     response = stage.run([20.0, -20.0, 5.0])
-    assert response.clamps["dac_clamped"] == 2
+    assert response.clamps.dac_clamped == 2
     assert stage.full_scale_command_v == 10.0
 
 
@@ -76,7 +76,7 @@ def test_a_sensor_span_below_the_stroke_saturates_and_is_counted():
     assert response.true_position_um.max() > 40.0
     assert response.measured_position_um.max() <= 20.0 + 1e-9
     over = int(np.sum(response.true_position_um > 20.5))
-    assert over > 0 and response.clamps["adc_clamped"] >= over
+    assert over > 0 and response.clamps.adc_clamped >= over
 
 
 def test_quasi_static_stroke_is_about_the_nominal_75_um():
@@ -145,3 +145,48 @@ def test_e_mhe_refuses_more_bins_than_the_record_supports():
         hystcomp.e_mhe(desired, desired, 11)
     with pytest.raises(hystcomp.InvalidValueError, match="use at most 10 bins"):
         hystcomp.tracking_indices(desired, desired)
+
+
+class _Axes:
+    """Records what plot_response asks of matplotlib's Axes (matplotlib is not a dependency)."""
+
+    def __init__(self):
+        self.calls = []
+
+    def __getattr__(self, name):
+        return lambda *args, **kwargs: self.calls.append((name, args, kwargs))
+
+
+def test_plot_response_draws_outputs_against_time_on_given_axes():
+    stage = hystcomp.Stage(seed=1)
+    desired = np.linspace(10.0, 20.0, 200)
+    response = stage.run(np.linspace(1.0, 3.0, 200))
+    ax = _Axes()
+    assert hystcomp.plot_response(response, ax, desired=desired, title="run") is ax
+    plots = [c for c in ax.calls if c[0] == "plot"]
+    assert len(plots) == 2
+    np.testing.assert_array_equal(plots[0][1][1], desired)
+    np.testing.assert_array_equal(plots[1][1][0], response.time)
+    np.testing.assert_array_equal(plots[1][1][1], response.outputs)
+    names = [c[0] for c in ax.calls]
+    assert {"set_xlabel", "set_ylabel", "set_title", "legend"} <= set(names)
+
+
+def test_reports_are_dataclasses_with_the_cli_json_fields():
+    import dataclasses
+
+    volts, um = table1_record()
+    fit = hystcomp.identify(volts, um, warmup=50, holdout=0.2)
+    report = fit.report
+    assert dataclasses.is_dataclass(report) and isinstance(report, hystcomp.FitReport)
+    assert isinstance(report.fit, hystcomp.ErrorStats) and isinstance(report.samples, hystcomp.SampleCounts)
+    assert report.samples.total == report.samples.warmup + report.samples.fit + report.samples.holdout
+    # The same fields as the JSON the model file keeps (and `hystcomp identify --json` prints).
+    as_json = fit.model.identification
+    assert report.to_dict().keys() == as_json.keys()
+    assert report.to_dict()["fit"] == as_json["fit"]
+    assert report.extra == {}
+    # Fields added later on the Rust side are kept, not lost.
+    more = dict(as_json, new_field=1)
+    assert hystcomp.FitReport.from_json(more).extra == {"new_field": 1}
+    assert dataclasses.is_dataclass(hystcomp.Stage().clamps)

@@ -13,9 +13,14 @@ and out):
   voltage out, never outside the limits;
 - ``identify(voltage, displacement, ...)``: a model from measured data (least squares or
   particle swarm);
-- ``Stage``: a simulated piezo stage, ``stage.run(volts)`` returning a ``StageResponse``;
+- ``Stage``: a simulated piezo stage, ``stage.run(volts)`` returning a ``StageResponse``
+  (``.time``, ``.inputs``, ``.outputs``, the internal signals; unpacks as ``t, y = ...``),
+  plotted by ``plot_response``;
 - ``e_m``, ``e_rms``, ``e_mhe``, ``tracking_indices``: the indices of section 4.3;
 - ``reproduce()``: the paper's comparative study (Table 3) on the simulated stage.
+
+Reports are dataclasses with the fields of the command line's JSON: ``FitReport``
+(``Identification.report``), ``Diagnostics``, ``Clamps``, ``StudySummary``.
 
 Errors are ``HystcompError`` subclasses (also ``ValueError``) or ``OSError`` for files.
 """
@@ -32,6 +37,21 @@ from ._errors import (
     NotInvertibleError,
     StageConfigError,
     WrongDirectionError,
+)
+from ._plot import plot_response
+from ._reports import (
+    AcceptanceCheck,
+    Clamps,
+    Diagnostics,
+    ErrorStats,
+    FitReport,
+    Indices,
+    PipelineSummary,
+    RunSummary,
+    SampleCounts,
+    SeriesFile,
+    SignalRange,
+    StudySummary,
 )
 from ._hystcomp import (
     DEFAULT_MHE_BINS,
@@ -55,6 +75,19 @@ from ._hystcomp import (
 )
 
 __all__ = [
+    "AcceptanceCheck",
+    "Clamps",
+    "Diagnostics",
+    "ErrorStats",
+    "FitReport",
+    "Indices",
+    "PipelineSummary",
+    "RunSummary",
+    "SampleCounts",
+    "SeriesFile",
+    "SignalRange",
+    "StudySummary",
+    "plot_response",
     "DEFAULT_MHE_BINS",
     "Compensator",
     "Dihc",

@@ -7,10 +7,12 @@ saying what was given. Array results are new ``float64`` numpy arrays.
 
 import os
 import pathlib
-from typing import Any, Dict, List, Optional, Sequence, Tuple, Union
+from typing import Any, Dict, Iterator, List, Optional, Sequence, Tuple, Union
 
 import numpy as np
 import numpy.typing as npt
+
+from ._reports import Clamps, Diagnostics, FitReport, StudySummary
 
 ArrayLike = Union[npt.ArrayLike, Sequence[float]]
 FloatArray = npt.NDArray[np.float64]
@@ -20,7 +22,15 @@ __version__: str
 DEFAULT_MHE_BINS: int
 
 class Mpim:
-    """The modified Prandtl-Ishlinskii model of eq. (4), normalised units, with memory."""
+    """The modified Prandtl-Ishlinskii model of eq. (4), in normalised units:
+    ``y(t) = a1 x(t)^3 + a2 x(t) + sum_i b_i F_{r_i}[x](t)`` with one-sided play operators
+    ``F_r`` (eqs. (1)-(2)).
+
+    A system object with memory: ``step(x)`` feeds one sample, ``process(x)`` a whole signal
+    (numpy array in, numpy array out), ``reset()`` returns to zero memory (eq. (1)).
+
+    Raises ``InvalidValueError`` for thresholds and weights of different lengths, negative or
+    unsorted thresholds, or NaN/infinite parameters."""
 
     def __init__(self, thresholds: ArrayLike, weights: ArrayLike, a1: float, a2: float) -> None:
         """``y = a1 x^3 + a2 x + sum b_i F_{r_i}[x]``: thresholds ``r_i`` (non-negative,
@@ -28,59 +38,82 @@ class Mpim:
         Raises InvalidValueError for NaN, unsorted or negative thresholds, or unequal lengths."""
     @staticmethod
     def table1() -> Mpim:
-        """Table 1 of the paper: the plant model for IHC and WIHC."""
+        """Table 1 of the paper: the plant model identified for IHC and WIHC (normalised voltage
+        in, normalised displacement out)."""
     @staticmethod
     def table2() -> Mpim:
-        """Table 2 of the paper: the inverse model for DIHC."""
+        """Table 2 of the paper: the inverse model identified for DIHC (normalised desired
+        displacement in, normalised voltage out; eq. (10) with ``a2``)."""
     @property
-    def thresholds(self) -> FloatArray: ...
+    def thresholds(self) -> FloatArray:
+        """Thresholds ``r_i`` (a copy)."""
     @property
-    def weights(self) -> FloatArray: ...
+    def weights(self) -> FloatArray:
+        """Weights ``b_i`` (a copy)."""
     @property
-    def a1(self) -> float: ...
+    def a1(self) -> float:
+        """Cubic coefficient ``a1`` of ``g(x) = a1 x^3 + a2 x``."""
     @property
-    def a2(self) -> float: ...
+    def a2(self) -> float:
+        """Linear coefficient ``a2`` of ``g(x) = a1 x^3 + a2 x``."""
     @property
     def memory(self) -> FloatArray:
-        """The operators' memory ``F_{r_i}[x](t_i)``, one per operator (a copy)."""
+        """The operators' memory ``F_{r_i}[x](t_i)`` (a copy)."""
     def set_memory(self, memory: ArrayLike) -> None:
-        """Sets the memory explicitly (one finite value per operator)."""
+        """Sets the operators' memory (one finite value per operator)."""
     def __len__(self) -> int:
         """The number of play operators ``n``."""
     def step(self, x: float) -> float:
-        """One sample; raises InvalidValueError for NaN or infinite ``x``."""
+        """Feeds one input sample ``x(t)`` and returns ``y(t)``, eq. (4).
+
+        Raises ``InvalidValueError`` (memory unchanged) when ``x`` is NaN or infinite."""
     def process(self, x: ArrayLike) -> FloatArray:
-        """A whole signal from the current memory."""
+        """Runs a whole input signal from the current memory; returns the outputs.
+
+        Raises ``InvalidValueError`` (memory unchanged) when a sample is NaN or infinite."""
     def reset(self) -> None:
         """Back to zero memory (eq. (1))."""
     def check_invertible(self, lo: float = 0.0, hi: float = 1.0) -> float:
-        """The smallest branch slope over ``[lo, hi]``; raises NotInvertibleError."""
+        """Checks that the output is strictly increasing in the current input over ``[lo, hi]``
+        from any memory reachable from the reset state (i.e. the model can be inverted there).
+        Returns the smallest branch slope; raises ``NotInvertibleError`` with the offending
+        slope, input and number of moving operators."""
     def pi_part_inverse(self) -> Mpim:
-        """The eq. (7) inverse of the PI part (``a1 = 0``)."""
+        """The analytic inverse of the PI part ``a2 v + sum b_i F_{r_i}[v]``, eq. (7), as a model
+        with ``a1 = 0``. Raises ``NotInvertibleError`` when it does not exist."""
     def copy(self) -> Mpim:
         """An independent copy, memory included."""
     def __copy__(self) -> Mpim:
         """``copy.copy(model)``: an independent copy, memory included (also a deep copy)."""
 
 class Scale:
-    """``physical = offset + scale * normalised``."""
+    """The physical meaning of a normalised signal: ``physical = offset + scale * normalised``."""
 
     def __init__(self, quantity: str, unit: str, offset: float = 0.0, scale: float = 1.0) -> None: ...
     @property
-    def quantity(self) -> str: ...
+    def quantity(self) -> str:
+        """What the signal is, e.g. ``"voltage"``."""
     @property
-    def unit(self) -> str: ...
+    def unit(self) -> str:
+        """Its unit, e.g. ``"V"``."""
     @property
-    def offset(self) -> float: ...
+    def offset(self) -> float:
+        """Physical value at normalised 0."""
     @property
-    def scale(self) -> float: ...
+    def scale(self) -> float:
+        """Physical span of one normalised unit."""
     def normalise(self, physical: float) -> float:
         """``(physical - offset) / scale``."""
     def to_physical(self, normalised: float) -> float:
         """``offset + scale * normalised``."""
 
 class ModelFile:
-    """An identified model with its physical scales and direction (JSON, format version 1)."""
+    """A model file: one identified MPIM in normalised units, the physical scales of its input
+    and output, and the direction it maps (``"plant"``: voltage to displacement, for IHC and
+    WIHC; ``"inverse"``: displacement to voltage, for DIHC). JSON on disk, format version 1.
+
+    Build one with ``ModelFile(...)``, read one with ``ModelFile.load(path)``, get one from
+    ``identify(...)``. Without ``input``/``output`` the scales are normalised (unit ``"1"``)."""
 
     def __init__(
         self,
@@ -100,46 +133,71 @@ class ModelFile:
         parameters of eq. (4) and the physical scales of input and output."""
     @staticmethod
     def load(path: PathLike) -> ModelFile:
-        """Reads and validates a model file. Raises FileNotFoundError, IsADirectoryError or
-        OSError (naming the path), or ModelFileError for bad contents."""
+        """Reads and validates a model file. Raises ``FileNotFoundError`` (or another ``OSError``)
+        when it cannot be read and ``ModelFileError`` when it is not a valid model file."""
     @staticmethod
     def from_json(text: str) -> ModelFile:
         """Parses and validates a model file's JSON text."""
     def to_json(self) -> str:
-        """The JSON text of the file (format version 1)."""
+        """The file's JSON text."""
     def save(self, path: PathLike) -> None:
-        """Writes the file atomically (a reader sees the old file or the new one)."""
+        """Writes the file atomically (a temporary file, then a rename)."""
     def model(self) -> Mpim:
-        """The normalised MPIM, from zero memory."""
+        """The MPIM of this file (normalised units, zero memory)."""
     def predict(self, inputs: ArrayLike) -> FloatArray:
-        """Model outputs (physical units) for physical inputs, from zero memory."""
+        """The model's output, in physical units, for a whole input signal in physical units
+        (e.g. volts in, micrometres out for a plant model), from zero memory."""
     @property
-    def direction(self) -> str: ...
+    def direction(self) -> str:
+        """``"plant"`` or ``"inverse"``."""
     @property
-    def description(self) -> Optional[str]: ...
+    def description(self) -> Optional[str]:
+        """A line for people, or ``None``."""
     @description.setter
-    def description(self, value: Optional[str]) -> None: ...
+    def description(self, value: Optional[str]) -> None:
+        """A line for people, or ``None``."""
     @property
-    def input(self) -> Scale: ...
+    def input(self) -> Scale:
+        """Physical meaning of the model input."""
     @property
-    def output(self) -> Scale: ...
+    def output(self) -> Scale:
+        """Physical meaning of the model output."""
     @property
-    def input_range(self) -> Tuple[float, float]: ...
+    def input_range(self) -> Tuple[float, float]:
+        """The normalised input range the model is valid (and invertible) on."""
     @property
-    def thresholds(self) -> FloatArray: ...
+    def thresholds(self) -> FloatArray:
+        """Thresholds ``r_i`` (normalised, a copy)."""
     @property
-    def weights(self) -> FloatArray: ...
+    def weights(self) -> FloatArray:
+        """Weights ``b_i`` (normalised, a copy)."""
     @property
-    def a1(self) -> float: ...
+    def a1(self) -> float:
+        """Cubic coefficient ``a1``."""
     @property
-    def a2(self) -> float: ...
+    def a2(self) -> float:
+        """Linear coefficient ``a2``."""
     @property
-    def format_version(self) -> int: ...
+    def format_version(self) -> int:
+        """The format version (1)."""
     @property
-    def identification(self) -> Optional[Dict[str, Any]]: ...
+    def identification(self) -> Optional[Dict[str, Any]]:
+        """How the model was obtained (a dict, e.g. the identification report), or ``None``."""
 
 class Compensator:
-    """Desired position in, drive voltage out (the model file's physical units)."""
+    """A feedforward hysteresis compensator (figure 1 of the paper): desired position in, drive
+    voltage out, in the physical units of its model file (e.g. um in, V out).
+
+    - ``model``: a ``ModelFile`` or the path of one;
+    - ``method``: ``"ihc"``, ``"ihc-delayed"``, ``"wihc"``, ``"wihc-delayed"`` (plant models) or
+      ``"dihc"`` (inverse models);
+    - ``limits``: ``(min, max)`` drive limits in the model's voltage unit; by default the range
+      the model was identified on.
+
+    Every output lies within ``limits`` and is never NaN. ``step`` and ``process`` refuse NaN or
+    infinite desired positions with ``InvalidValueError`` (state unchanged). Raises
+    ``WrongDirectionError``, ``NotInvertibleError`` (over the limits), ``InvalidValueError``,
+    ``ModelFileError`` or ``FileNotFoundError`` when it cannot be built."""
 
     def __init__(
         self,
@@ -154,20 +212,22 @@ class Compensator:
         or an OSError for the file."""
     @staticmethod
     def from_mpim(model: Mpim, method: str = "ihc", limits: Sequence[float] = (0.0, 1.0)) -> Compensator:
-        """A compensator in normalised units."""
+        """A compensator from a model in normalised units (desired position and control both
+        normalised, eq. (11)): a plant model for IHC and WIHC, an inverse model (valid for
+        desired positions in ``[0, 1]``) for DIHC."""
     def step(self, y_d: float) -> float:
-        """One sample: the drive for the desired position ``y_d``; InvalidValueError for NaN
-        or infinite ``y_d`` (state unchanged)."""
+        """One sample: the drive for the desired position ``y_d``."""
     def process(self, y_d: ArrayLike) -> FloatArray:
-        """A whole desired trajectory from the current state: the drive signal."""
+        """A whole desired trajectory (array-like) from the current state: the drive signal
+        (numpy array). Releases the GIL while it runs."""
     def reset(self) -> None:
-        """Back to the initial state (memory zero, eq. (1)); diagnostics cleared."""
+        """Back to the initial state: operators' memory zero (eq. (1)), diagnostics cleared."""
     @property
     def limits(self) -> Tuple[float, float]:
         """``(min, max)`` drive limits, in ``control_unit``."""
     @property
     def method(self) -> str:
-        """``"ihc"``, ``"ihc-delayed"``, ``"wihc"``, ``"wihc-delayed"`` or ``"dihc"``."""
+        """The method: ``"ihc"``, ``"ihc-delayed"``, ``"wihc"``, ``"wihc-delayed"`` or ``"dihc"``."""
     @property
     def desired_unit(self) -> str:
         """Unit of the desired position (the input), e.g. ``"um"``."""
@@ -175,25 +235,38 @@ class Compensator:
     def control_unit(self) -> str:
         """Unit of the drive (the output), e.g. ``"V"``."""
     @property
-    def diagnostics(self) -> Dict[str, int]:
-        """``{"saturated": ..., "loop_saturated": ..., "non_finite": ...}`` since the last
-        reset: desired positions out of reach (the drive was clamped), samples a delayed loop
-        drove to a limit although the position was reachable, and non-finite inputs."""
+    def diagnostics(self) -> Diagnostics:
+        """Counters since the last reset:
+        A ``Diagnostics`` dataclass: ``saturated``, ``loop_saturated``, ``non_finite``. ``saturated``: desired
+        positions out of reach within the limits (DIHC: outside the inverse model's range), the
+        drive was clamped; ``loop_saturated``: a delayed loop (``ihc-delayed``, ``wihc-delayed``)
+        drove the output to a limit although the position was reachable (it lagged or rang);
+        ``non_finite``: NaN or infinite desired positions (``step`` and ``process`` refuse them,
+        so this stays 0 here)."""
     @property
     def delayed_loop_gain(self) -> Optional[float]:
-        """``wihc``/``wihc-delayed``: the delayed WIHC's worst-case loop gain over the limits,
-        ``max |3 a1 x^2 + b_1 + ... + b_k| / a2``; at or above 1 the delayed loop can ring after a
-        jump (prefer ``"wihc"``). ``None`` for the other methods. Table 1: 1.66."""
+        """For ``"wihc"`` and ``"wihc-delayed"``: the worst-case loop gain of the delayed WIHC over
+        the limits, ``max |3 a1 x^2 + b_1 + ... + b_k| / a2`` (eq. (9) with ``H[v](t - Ts)``). At
+        or above 1 the delayed loop can ring between the limits after a jump in the desired
+        position; prefer ``"wihc"`` then. ``None`` for the other methods. Table 1: 1.66."""
 
 class Identification:
-    """An identified model and its fit report."""
+    """An identified model: ``.model`` (a ``ModelFile``, physical scales and normalised
+    parameters), ``.report`` (a ``FitReport`` dataclass: fit errors in physical units and % of the output range,
+    sample counts, solver details, smallest branch slope...) and ``.parameters`` (a dict of the
+    normalised ``a1``, ``a2``, ``weights`` and fitted ``offset``)."""
 
     @property
-    def model(self) -> ModelFile: ...
+    def model(self) -> ModelFile:
+        """The model file (its ``identification`` field holds the report too)."""
     @property
-    def report(self) -> Dict[str, Any]: ...
+    def report(self) -> FitReport:
+        """The fit report, a ``FitReport`` dataclass with the fields of ``hystcomp identify
+        --json``'s report (``.fit.rms_percent``, ``.samples.warmup``, ``.holdout``, ...;
+        ``.to_dict()`` for the dict)."""
     @property
-    def parameters(self) -> Dict[str, Any]: ...
+    def parameters(self) -> Dict[str, Any]:
+        """The normalised parameters, as a dict."""
 
 def identify(
     voltage: ArrayLike,
@@ -215,116 +288,219 @@ def identify(
     voltage_unit: str = "V",
     displacement_unit: str = "um",
 ) -> Identification:
-    """Identifies an MPIM (eq. (4)) from (voltage, displacement) samples."""
+    """Identifies a modified Prandtl-Ishlinskii model (eq. (4)) from a record of drive voltages
+    and measured displacements (equal lengths, finite), as ``hystcomp identify`` does.
+
+    - ``n``: play operators at thresholds ``(i - 1)/n`` of the input range (eq. (11)), unless
+      ``thresholds`` gives them (fractions of the input range in ``[0, 1)``, increasing);
+    - ``method``: ``"ls"`` (constrained least squares, the global optimum) or ``"pso"``
+      (particle swarm, as the paper; ``seed``, ``particles``, ``iterations``, ``polish``);
+    - ``direction``: ``"plant"`` (voltage to displacement, for IHC and WIHC) or ``"inverse"``
+      (displacement to voltage, for DIHC);
+    - ``warmup``: ``"auto"`` or a number of leading samples excluded from the fit;
+    - ``holdout``: the fraction of samples at the end held out of the fit and reported;
+    - ``offset``: ``"fit"`` (a constant fitted for the sensor's arbitrary zero), ``"none"`` or a
+      physical output offset;
+    - ``margin``: the smallest branch slope the model must keep (normalised);
+    - ``accept_poor_fit``: return the model even when its RMS fit error exceeds the 10 % of the
+      output range a usable hysteresis model stays under (by default ``IdentificationError``).
+
+    Releases the GIL while it runs. Raises ``InvalidValueError`` for unusable samples or
+    options and ``IdentificationError`` when no model can be identified (the message says what
+    to change)."""
 
 class Stage:
-    """A simulated piezo nanopositioning stage."""
+    """A simulated piezo nanopositioning stage (DAC, amplifier, hysteresis, creep, resonance,
+    sensor, ADC), standing in for the set-up of the paper's section 4.1.
+
+    ``Stage(config_toml=None, seed=0)``: the built-in default stage, or a stage file's TOML
+    text (unspecified keys keep their defaults); ``seed`` seeds the sensor noise. Deterministic:
+    the same seed gives the same response. ``step(command_v)`` writes one DAC command (V) and
+    returns the measured position (um) one sample period later; ``run(volts)`` runs a whole
+    command signal and returns a ``StageResponse``.
+
+    Raises ``StageConfigError`` for an invalid stage file and ``InvalidValueError`` for NaN or
+    infinite commands (the state is then unchanged)."""
 
     def __init__(self, config_toml: Optional[str] = None, seed: int = 0) -> None:
         """The built-in stage, or one described by a TOML text; ``seed`` fixes its noise."""
     @staticmethod
     def from_file(path: PathLike, seed: int = 0) -> Stage:
-        """A stage from a TOML file."""
+        """A stage from a stage file (TOML). Raises ``FileNotFoundError`` when it is missing."""
     def step(self, command_v: float) -> float:
-        """One sample: the measured position (um) for a DAC command (V)."""
+        """One sample: writes ``command_v`` (V) to the DAC, holds it for one period and returns the
+        measured position at the end of the period (um)."""
     def run(self, command_v: ArrayLike) -> StageResponse:
-        """A whole command signal from the current state."""
+        """A whole command signal (V, one value per sample) from the current state. Releases the
+        GIL while it runs."""
     def reset(self) -> None:
-        """Back to rest, time zero, the same noise sequence."""
+        """Back to rest: relaxed, at 0 V, time 0, noise generator re-seeded."""
     @property
-    def sample_rate_hz(self) -> float: ...
+    def sample_rate_hz(self) -> float:
+        """The controller's sample rate, Hz."""
     @property
-    def period_s(self) -> float: ...
+    def period_s(self) -> float:
+        """The sample period, s."""
     @property
-    def samples(self) -> int: ...
+    def samples(self) -> int:
+        """Samples run since the stage was built or reset."""
     @property
-    def time_s(self) -> float: ...
+    def time_s(self) -> float:
+        """The stage's time, s."""
     @property
-    def seed(self) -> int: ...
+    def seed(self) -> int:
+        """The noise seed."""
     @property
-    def clamps(self) -> Dict[str, int]: ...
+    def clamps(self) -> Clamps:
+        """Samples clamped or ignored since the stage was built or reset: ``dac_clamped`` and
+        ``amplifier_clamped`` (commands beyond the DAC's span or the amplifier's rails),
+        ``non_finite`` (NaN or infinite commands) and ``adc_clamped`` (readings beyond the ADC's
+        span: the measured position saturated)."""
     @property
-    def full_scale_command_v(self) -> float: ...
+    def full_scale_command_v(self) -> float:
+        """The full-scale command, V: the one that drives the amplifier to its upper rail, or the
+        DAC's top when the amplifier's gain cannot reach the rail from it."""
     @property
-    def config_toml(self) -> str: ...
-    def quasi_static_stroke_um(self) -> float: ...
+    def config_toml(self) -> str:
+        """The stage's configuration as a complete stage file (TOML text)."""
+    def quasi_static_stroke_um(self) -> float:
+        """The quasi-static stroke at full command (a slow ramp on a fresh copy of this stage's
+        configuration), um. The linear feedforward gain of section 4.3.1 is
+        ``full_scale_command_v / quasi_static_stroke_um()``."""
 
 class StageResponse:
-    """python-control style: ``time``, ``inputs`` (V), ``outputs`` (um), one per sample."""
+    """The response of ``Stage.run`` (python-control style): one entry per command sample.
+
+    ``time[k]`` is when command ``k`` was written; the positions are read one sample period
+    later. ``inputs`` is ``command_v`` and ``outputs`` is ``measured_position_um``; the stage's
+    internal signals are ``amplifier_v`` and ``true_position_um``. It unpacks as ``t, y =
+    stage.run(volts)``, and ``hystcomp.plot_response(response)`` plots it (matplotlib)."""
 
     @property
-    def time(self) -> FloatArray: ...
+    def time(self) -> FloatArray:
+        """Time at which each command was written, s."""
     @property
-    def inputs(self) -> FloatArray: ...
+    def inputs(self) -> FloatArray:
+        """The commands, V (same as ``command_v``)."""
     @property
-    def outputs(self) -> FloatArray: ...
+    def outputs(self) -> FloatArray:
+        """The measured positions, um (same as ``measured_position_um``)."""
     @property
-    def command_v(self) -> FloatArray: ...
+    def command_v(self) -> FloatArray:
+        """The commands, V."""
     @property
-    def amplifier_v(self) -> FloatArray: ...
+    def amplifier_v(self) -> FloatArray:
+        """The amplifier's output, V."""
     @property
-    def true_position_um(self) -> FloatArray: ...
+    def true_position_um(self) -> FloatArray:
+        """The true position, um."""
     @property
-    def measured_position_um(self) -> FloatArray: ...
+    def measured_position_um(self) -> FloatArray:
+        """The measured position (sensor and ADC), um."""
     @property
-    def clamps(self) -> Dict[str, int]: ...
+    def clamps(self) -> Clamps:
+        """Samples the stage clamped during this run, by the same keys as ``Stage.clamps``."""
     def __len__(self) -> int: ...
+    def __iter__(self) -> Iterator[FloatArray]:
+        """Unpacks as ``t, y = stage.run(volts)``: the time and the measured positions."""
 
 class TrackingIndices:
-    """e_mhe (eq. (12)), e_m (D1), e_rms (D2), percent of the desired range."""
+    """The three indices of the paper's Table 3, in percent of the desired range:
+    ``e_mhe`` (eq. (12), the largest vertical width of the ``y`` versus ``y_d`` map over
+    ``mhe_bins`` bins of ``y_d``), ``e_m`` ((D1), the largest tracking error) and ``e_rms``
+    ((D2), the RMS tracking error)."""
 
     @property
-    def e_mhe(self) -> float: ...
+    def e_mhe(self) -> float:
+        """Maximum hysteresis error, eq. (12), %."""
     @property
-    def e_m(self) -> float: ...
+    def e_m(self) -> float:
+        """Maximum tracking error, (D1), %."""
     @property
-    def e_rms(self) -> float: ...
+    def e_rms(self) -> float:
+        """RMS tracking error, (D2), %."""
     @property
-    def mhe_bins(self) -> int: ...
-    def as_dict(self) -> Dict[str, float]: ...
+    def mhe_bins(self) -> int:
+        """Bins of the ``y_d`` range used for ``e_mhe``."""
+    def as_dict(self) -> Dict[str, float]:
+        """``{"e_mhe": ..., "e_m": ..., "e_rms": ...}`` (percent)."""
 
 def e_m(desired: ArrayLike, measured: ArrayLike) -> float:
-    """Maximum tracking error (D1), percent of the desired range."""
-def e_rms(desired: ArrayLike, measured: ArrayLike) -> float:
-    """Root-mean-square tracking error (D2), percent of the desired range."""
-def e_mhe(desired: ArrayLike, measured: ArrayLike, bins: int = 100) -> float:
-    """Maximum hysteresis error, eq. (12), over ``bins`` bins, percent of the desired range.
+    """(D1): ``max |y - y_d| / (max y_d - min y_d) * 100`` (percent).
 
-    Needs at least 10 samples per bin on average (``bins <= max(1, len(desired) // 10)``);
-    raises otherwise, naming the largest ``bins`` the record supports."""
+    Raises ``InvalidValueError`` for records of different lengths, fewer than 2 samples, NaN
+    or infinite samples, or a constant desired trajectory."""
+def e_rms(desired: ArrayLike, measured: ArrayLike) -> float:
+    """(D2): ``sqrt(mean (y - y_d)^2) / (max y_d - min y_d) * 100`` (percent)."""
+def e_mhe(desired: ArrayLike, measured: ArrayLike, bins: int = 100) -> float:
+    """Eq. (12): the largest ``max y - min y`` within one of ``bins`` equal bins of the ``y_d``
+    range, divided by ``max y_d - min y_d``, times 100 (percent). Needs at least 10 samples per
+    bin on average (``bins <= max(1, len(desired) // 10)``): with fewer, bins hold one sample or
+    none and e_mhe reads low; otherwise raises with the largest ``bins`` the record supports."""
 def tracking_indices(desired: ArrayLike, measured: ArrayLike, bins: int = 100) -> TrackingIndices:
-    """e_mhe, e_m and e_rms together; ``bins`` as for :func:`e_mhe`."""
+    """All three indices of ``measured`` (``y``) against ``desired`` (``y_d``); ``bins`` as for
+    :func:`e_mhe` (at least 10 samples per bin on average)."""
 
 class StudyResult:
-    """The paper's Table 3 measured on the simulated stage."""
+    """The result of ``reproduce()``: the paper's Table 3 measured on the simulated stage.
+
+    - ``table``: ``{"uncompensated": {...}, "paper": {"ihc": {...}, "wihc": {...},
+      "dihc": {...}}, "exact": {...}}`` with ``{"e_mhe", "e_m", "e_rms"}`` in percent;
+    - ``published``: the paper's Table 3 in the same shape;
+    - ``summary``: everything ``hystcomp reproduce --json`` prints (acceptance checks, cross
+      runs, fits...); ``passed``: whether every acceptance check holds;
+    - ``models``: the identified model files, ``{"paper": {"plant": ..., "inverse": ...},
+      "exact": {...}}``;
+    - ``time``, ``desired_um`` and ``runs`` (label -> ``{"command_v", "measured_um"}``) for
+      plots; the indices are taken from ``evaluation_start`` on (the last full period);
+    - ``report``: the path of the HTML report when ``out_dir`` was given, else ``None``.
+
+    ``str(result)`` is the plain-text Table 3 of ``hystcomp reproduce``."""
 
     @property
-    def table(self) -> Dict[str, Any]: ...
+    def table(self) -> Dict[str, Any]:
+        """Our Table 3, percent."""
     @property
-    def published(self) -> Dict[str, Dict[str, float]]: ...
-    def indices(self, pipeline: str, method: Optional[str] = None) -> TrackingIndices: ...
+    def published(self) -> Dict[str, Dict[str, float]]:
+        """The paper's Table 3 (measured on its hardware), percent."""
+    def indices(self, pipeline: str, method: Optional[str] = None) -> TrackingIndices:
+        """The indices of one run: ``result.indices("exact", "ihc")``, or
+        ``result.indices("uncompensated")``."""
     @property
-    def summary(self) -> Dict[str, Any]: ...
+    def summary(self) -> StudySummary:
+        """Everything ``hystcomp reproduce --json`` reports, as a ``StudySummary`` dataclass with
+        the same fields (``.to_dict()`` for the dict)."""
     @property
-    def acceptance(self) -> List[Dict[str, Any]]: ...
+    def acceptance(self) -> List[Dict[str, Any]]:
+        """The acceptance checks: a list of ``{"what", "value", "bound", "passed"}``."""
     @property
-    def passed(self) -> bool: ...
+    def passed(self) -> bool:
+        """Whether every acceptance check holds."""
     @property
-    def models(self) -> Dict[str, Dict[str, ModelFile]]: ...
+    def models(self) -> Dict[str, Dict[str, ModelFile]]:
+        """The identified model files of each pipeline."""
     @property
-    def time(self) -> FloatArray: ...
+    def time(self) -> FloatArray:
+        """Time axis of the tracking runs, s."""
     @property
-    def desired_um(self) -> FloatArray: ...
+    def desired_um(self) -> FloatArray:
+        """The desired trajectory, um."""
     @property
-    def evaluation_start(self) -> int: ...
+    def evaluation_start(self) -> int:
+        """First sample of the evaluation window (the last full period)."""
     @property
-    def runs(self) -> Dict[str, Dict[str, FloatArray]]: ...
+    def runs(self) -> Dict[str, Dict[str, FloatArray]]:
+        """Every tracking run, by label (e.g. ``"exact / ihc"``): its command (V) and measured
+        position (um)."""
     @property
-    def labels(self) -> List[str]: ...
+    def labels(self) -> List[str]:
+        """The labels of the runs, in order."""
     @property
-    def report(self) -> Optional[pathlib.Path]: ...
+    def report(self) -> Optional[pathlib.Path]:
+        """The HTML report written to ``out_dir``, or ``None``."""
     @property
-    def elapsed_s(self) -> float: ...
+    def elapsed_s(self) -> float:
+        """Wall-clock time of the study, s."""
 
 def reproduce(
     *,
@@ -336,7 +512,24 @@ def reproduce(
     pso_particles: Optional[int] = None,
     out_dir: Optional[PathLike] = None,
 ) -> StudyResult:
-    """The comparative study of section 4 on the simulated stage."""
+    """Reproduces the paper's comparative study (section 4, Table 3) on the simulated stage, as
+    ``hystcomp reproduce`` does: an identification experiment, a plant and an inverse model
+    identified by particle swarm (``paper`` pipeline, with delayed IHC and WIHC) and by least
+    squares (``exact`` pipeline, with exact IHC and WIHC), DIHC in both, and the uncompensated
+    run; the indices on the last of ``periods`` periods of the paper's trajectory.
+
+    - ``stage_toml``: a stage file's TOML text (the default stage without it);
+    - ``seed``: the stage noise (identification; tracking runs use ``seed + 1``) and the swarm;
+    - ``pso_iterations``, ``pso_particles``: the ``paper`` pipeline's swarm (by default that of
+      ``hystcomp reproduce``; fewer is faster);
+    - ``out_dir``: also write the HTML report, the figures and the models there.
+
+    Releases the GIL while it runs. Raises
+    ``StageConfigError``, ``IdentificationError``, ``InvalidValueError`` (e.g. fewer than 2
+    periods) or ``OSError`` (the report could not be written)."""
 
 def paper_trajectory(duration_s: float = 10.0, sample_rate_hz: float = 10000.0) -> Tuple[FloatArray, FloatArray]:
-    """The paper's desired trajectory: ``(time_s, y_d_um)``."""
+    """The paper's desired trajectory (section 4.3),
+    ``y_d(t) = 37.35 + 10.5 sin(pi t + 2.6) + 10.5 sin(1.6 pi t + 3) + 15.75 sin(2 pi t + 1.5)``
+    um, sampled at ``sample_rate_hz`` for ``duration_s`` (one 10 s period by default).
+    Returns ``(time_s, y_d_um)``."""
