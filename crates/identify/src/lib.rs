@@ -66,7 +66,9 @@
 //! ```
 #![warn(missing_docs)]
 
+pub mod chain;
 pub mod crossval;
+pub mod dynamics;
 mod error;
 mod identification;
 pub mod ls;
@@ -76,10 +78,15 @@ pub mod pso;
 mod report;
 mod solver;
 
+pub use chain::{
+    ChainIdentification, ChainOptions, ChainReport, Contribution, CreepFit, CreepOptions,
+    identify_chain,
+};
 pub use crossval::{
     CrossValidation, CrossvalOptions, CrossvalReport, Record, Replay, Validation, crossval,
     validate_models,
 };
+pub use dynamics::{DynamicsFit, DynamicsOptions, Mode, fit_dynamics};
 pub use error::IdentifyError;
 pub use identification::{Identification, identify, identify_observed};
 pub use ls::LeastSquares;

@@ -49,6 +49,15 @@
 //!   after a jump: a model meeting them may still ring when that gain exceeds 1.
 //!
 //! Rows that coincide are kept once.
+//!
+//! # Extra regressors
+//! [`FitProblem::with_extra_columns`] appends columns the caller computed (the creep link's
+//! filtered outputs, see `crate::chain`) to the regressors, with one parameter each at the end
+//! of `theta`: the fit stays one linear least-squares problem, jointly in the MPIM's
+//! parameters and theirs, under the same constraints on the MPIM's. Each extra parameter `e_j`
+//! is kept non-negative by the row `EXTRA_ROW_SCALE e_j >= margin`, i.e.
+//! `e_j >= margin / EXTRA_ROW_SCALE` (1e-6 with the default margin): the rows share the
+//! margin of the others, and the scale makes the bound zero for practical purposes.
 
 use std::ops::Range;
 
@@ -67,6 +76,10 @@ use crate::identification::parameter_count;
 /// boundary when its answer is kept. The one definition of both counts
 /// ([`FitProblem::active_count`], [`FitProblem::violated_count`]) and of the report's.
 pub const ACTIVE_TOLERANCE: f64 = 1e-6;
+
+/// The scale of the rows that keep the extra parameters non-negative (see the
+/// [module documentation](self)).
+pub const EXTRA_ROW_SCALE: f64 = 1000.0;
 
 /// The normalised input range the constraints are imposed on.
 const INPUT_RANGE: (f64, f64) = (0.0, 1.0);
@@ -108,6 +121,11 @@ pub enum ConstraintKind {
         /// `+1` or `-1`.
         sign: f64,
     },
+    /// `EXTRA_ROW_SCALE e_j >= margin`: an extra regressor's parameter is non-negative.
+    ExtraNonNegative {
+        /// Which extra parameter (0-based).
+        index: usize,
+    },
 }
 
 /// One linear constraint `coefficients . theta >= margin` on the problem's parameter vector.
@@ -144,6 +162,8 @@ pub struct FitProblem {
     fit_offset: bool,
     /// `r_1 = 0`: `b_1` folded into `s`.
     folded: bool,
+    /// Extra regressor columns, whose parameters end `theta`.
+    extra: usize,
     /// `b_1 = split * a1` when folded.
     split: f64,
     samples: usize,
@@ -174,9 +194,34 @@ impl FitProblem {
         fit_offset: bool,
         margin: f64,
     ) -> Result<Self, IdentifyError> {
+        Self::with_extra_columns(data, thresholds, direction, fit_offset, margin, &[])
+    }
+
+    /// As [`FitProblem::new`], with `extra` regressor columns (each one value per sample of
+    /// the record, like `data.input`) and one parameter each, unconstrained, at the end of
+    /// `theta` (see the [module documentation](self)).
+    pub fn with_extra_columns(
+        data: ProblemData<'_>,
+        thresholds: &[f64],
+        direction: Direction,
+        fit_offset: bool,
+        margin: f64,
+        extra: &[&[f64]],
+    ) -> Result<Self, IdentifyError> {
         let ProblemData { input, output, fit } = data;
         let folded = thresholds.first() == Some(&0.0);
-        let p = parameter_count(thresholds, fit_offset);
+        let own = parameter_count(thresholds, fit_offset);
+        let p = own + extra.len();
+        if let Some(column) = extra.iter().find(|c| c.len() != input.len()) {
+            return Err(IdentifyError::InvalidOption {
+                option: "extra regressor",
+                value: format!("{} samples", column.len()),
+                reason: format!(
+                    "one value per sample of the record ({}) is needed",
+                    input.len()
+                ),
+            });
+        }
         if input.len() != output.len() || fit.end > input.len() || fit.len() < p + 1 {
             return Err(IdentifyError::InvalidOption {
                 option: "fitting span",
@@ -209,7 +254,11 @@ impl FitProblem {
             }
         }
         if fit_offset {
-            phi.column_mut(p - 1).fill(1.0);
+            phi.column_mut(own - 1).fill(1.0);
+        }
+        for (j, column) in extra.iter().enumerate() {
+            phi.column_mut(own + j)
+                .copy_from_slice(&column[fit.clone()]);
         }
         phi.column_mut(p).copy_from_slice(&output[fit.clone()]);
 
@@ -259,6 +308,7 @@ impl FitProblem {
             direction,
             fit_offset,
             folded,
+            extra: extra.len(),
             split,
             samples: rows,
             r_theta,
@@ -291,7 +341,19 @@ impl FitProblem {
         if self.fit_offset {
             names.push("c".to_owned());
         }
+        names.extend((1..=self.extra).map(|j| format!("e{j}")));
         names
+    }
+
+    /// The number of extra regressors (see [`FitProblem::with_extra_columns`]).
+    pub fn extra_count(&self) -> usize {
+        self.extra
+    }
+
+    /// The extra regressors' parameters: the last [`FitProblem::extra_count`] entries of
+    /// `theta`.
+    pub fn extra_parameters<'t>(&self, theta: &'t [f64]) -> &'t [f64] {
+        &theta[theta.len() - self.extra..]
     }
 
     /// The thresholds `r_i`.
@@ -398,7 +460,7 @@ impl FitProblem {
     }
 
     /// The parameter vector of model parameters (the inverse of [`FitProblem::parameters`] up
-    /// to the split: with a zero threshold only `a2 + b_1` is kept).
+    /// to the split: with a zero threshold only `a2 + b_1` is kept; extra parameters 0).
     pub fn theta(&self, parameters: &Parameters) -> Vec<f64> {
         let mut theta = vec![parameters.a1, parameters.a2];
         let mut weights = parameters.weights.iter();
@@ -409,6 +471,7 @@ impl FitProblem {
         if self.fit_offset {
             theta.push(parameters.offset);
         }
+        theta.resize(theta.len() + self.extra, 0.0);
         theta
     }
 
@@ -434,7 +497,7 @@ impl FitProblem {
             full.extend_from_slice(&theta[2..2 + n]);
         }
         if self.fit_offset {
-            full.push(theta[theta.len() - 1]);
+            full.push(theta[theta.len() - 1 - self.extra]);
         }
         full
     }
@@ -523,6 +586,15 @@ impl FitProblem {
                     );
                 }
             }
+        }
+        let p = self.dimension();
+        for index in 0..self.extra {
+            let mut coefficients = vec![0.0; p];
+            coefficients[p - self.extra + index] = EXTRA_ROW_SCALE;
+            rows.push(Constraint {
+                coefficients,
+                kind: ConstraintKind::ExtraNonNegative { index },
+            });
         }
         rows
     }

@@ -1,0 +1,549 @@
+//! Identification of the whole chain `hysteresis -> creep -> vibration` (Croft, Shed & Devasia
+//! 2001, doi:10.1115/1.1341197) from (voltage, displacement) samples only.
+//!
+//! 1. **Hysteresis alone**: the MPIM of [`crate::identify`] on the (decimated) record, as a
+//!    reference for what the other links contribute.
+//! 2. **Hysteresis and creep jointly**, by one linear least-squares fit under the same
+//!    invertibility constraints. The creep link is written through its inverse
+//!    (`hystcomp_core::Creep`): `h = y - sum_i c_i (z_i[y] - origin)` with first-order
+//!    elements `z_i` at fixed log-spaced time constants (Kuhnen's creep operators, Kuhnen 2005),
+//!    so that the measured displacement obeys
+//!
+//!    `y(k) = H[v](k) + c + sum_i c_i z_i[y](k)`,
+//!
+//!    linear in the MPIM's parameters, the offset and the weights `c_i` together: the filtered
+//!    measurements `z_i[y]` are extra regressors of the [`FitProblem`] (an equation-error fit;
+//!    the filters average the sensor noise away, so its bias is negligible). With the creep
+//!    link in the forward form after the hysteresis the same fit would be bilinear and need
+//!    alternating least squares. The elements start at rest at the record's first
+//!    displacement, which is taken as the relaxed position (`origin`): records should start
+//!    from rest.
+//!    When the vibration segment lies in the second half of the record, the hysteresis and
+//!    creep are fitted on the samples before it.
+//! 3. **Vibration** ([`crate::dynamics`]): the hysteresis and creep links predict their output
+//!    from the voltage at the record's full rate, and the vibration link is fitted between that
+//!    prediction and the measured displacement on a segment with high-frequency content.
+//!
+//! An **inverse** (DIHC) chain uses the plant's creep and vibration links and fits its MPIM
+//! from the creep-free displacement `C^-1[y]` to the voltage ([`crate::identify`] with
+//! `Direction::Inverse`).
+//!
+//! The report gives each link's contribution: the RMS error of the hysteresis alone, with
+//! creep, and with vibration, over the fitted samples and over the vibration segment.
+
+use std::time::Instant;
+
+use hystcomp_core::{Ihc, Mpim, OutputLimits, SolveMode, Wihc};
+use hystcomp_io::model_file::{CreepPart, Direction, ModelFile, Scale};
+use serde::{Deserialize, Serialize};
+
+use crate::dynamics::{DynamicsFit, DynamicsOptions, fit_dynamics};
+use crate::report::ErrorStats;
+use crate::{
+    FitProblem, FitReport, Identification, IdentifyError, IdentifyOptions, LeastSquares, Method,
+    NoObserver, ProblemData, Solver, identify,
+};
+
+/// The most creep time constants.
+pub const MAX_CREEP_ELEMENTS: usize = hystcomp_core::MAX_CREEP_ELEMENTS;
+/// The largest decimation of the hysteresis-and-creep fit.
+pub const MAX_DECIMATION: usize = 1000;
+
+/// The creep link's time constants.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct CreepOptions {
+    /// Time constants `tau_i`, s: positive, increasing, at most [`MAX_CREEP_ELEMENTS`].
+    pub time_constants_s: Vec<f64>,
+}
+
+impl CreepOptions {
+    /// `per_decade` time constants per decade from `first_s` to `last_s` (both included when
+    /// they lie on the grid).
+    pub fn log_spaced(first_s: f64, last_s: f64, per_decade: usize) -> CreepOptions {
+        let step = 10f64.powf(1.0 / per_decade.max(1) as f64);
+        let mut time_constants_s = Vec::new();
+        let mut tau = first_s;
+        while tau <= last_s * (1.0 + 1e-9) && time_constants_s.len() < MAX_CREEP_ELEMENTS {
+            time_constants_s.push(tau);
+            tau *= step;
+        }
+        CreepOptions { time_constants_s }
+    }
+
+    fn validate(&self, period_s: f64) -> Result<(), IdentifyError> {
+        let t = &self.time_constants_s;
+        let invalid = |reason: String| IdentifyError::InvalidOption {
+            option: "creep time constants",
+            value: format!("{t:?}"),
+            reason,
+        };
+        if t.is_empty() || t.len() > MAX_CREEP_ELEMENTS {
+            return Err(invalid(format!(
+                "give 1 to {MAX_CREEP_ELEMENTS} time constants"
+            )));
+        }
+        if t.iter().any(|v| !(v.is_finite() && *v > 0.0)) || t.windows(2).any(|w| w[1] <= w[0]) {
+            return Err(invalid(
+                "time constants must be positive and increase".to_owned(),
+            ));
+        }
+        if t[0] < 2.0 * period_s {
+            return Err(invalid(format!(
+                "the shortest must be at least two sample periods of the decimated record ({} s)",
+                2.0 * period_s
+            )));
+        }
+        Ok(())
+    }
+}
+
+impl Default for CreepOptions {
+    /// Two per decade from 10 ms to 100 s.
+    fn default() -> Self {
+        CreepOptions::log_spaced(0.01, 100.0, 2)
+    }
+}
+
+/// What the chain's identification adds to [`IdentifyOptions`].
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct ChainOptions {
+    /// The record's sample rate, Hz.
+    pub sample_rate_hz: f64,
+    /// The hysteresis and creep links are fitted on every `decimation`-th sample (1: all; the
+    /// hysteresis is rate independent and creep slow, so a 1 kHz record suffices); the
+    /// vibration link always on the full rate.
+    pub decimation: usize,
+    /// The creep link, if any.
+    pub creep: Option<CreepOptions>,
+    /// The vibration link, if any.
+    pub dynamics: Option<DynamicsOptions>,
+}
+
+impl ChainOptions {
+    fn validate(&self) -> Result<(), IdentifyError> {
+        if !(self.sample_rate_hz.is_finite() && self.sample_rate_hz > 0.0) {
+            return Err(IdentifyError::InvalidOption {
+                option: "sample rate",
+                value: self.sample_rate_hz.to_string(),
+                reason: "give the record's sample rate in Hz (positive)".to_owned(),
+            });
+        }
+        if !(1..=MAX_DECIMATION).contains(&self.decimation) {
+            return Err(IdentifyError::InvalidOption {
+                option: "decimation",
+                value: self.decimation.to_string(),
+                reason: format!("give 1 to {MAX_DECIMATION}"),
+            });
+        }
+        if let Some(c) = &self.creep {
+            c.validate(self.decimation as f64 / self.sample_rate_hz)?;
+        }
+        if let Some(d) = &self.dynamics {
+            d.validate()?;
+        }
+        Ok(())
+    }
+}
+
+/// The identified creep link.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct CreepFit {
+    /// The link as written to the model file.
+    pub part: CreepPart,
+    /// `1 / (1 - sum c_i)`: how far a held step creeps in the end.
+    pub static_gain: f64,
+    /// The condition number of the joint fit's column-scaled regressors.
+    pub condition_number: f64,
+}
+
+/// RMS errors of the chain with its links added one by one.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Contribution {
+    /// `hysteresis`, `+ creep` or `+ vibration`.
+    pub model: String,
+    /// RMS error over the fitted samples, % of the fitted output range.
+    pub rms_percent: f64,
+    /// RMS error over the vibration segment, same unit (when there is one).
+    pub segment_rms_percent: Option<f64>,
+}
+
+/// How the chain was identified and how well it fits.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct ChainReport {
+    /// The MPIM's own fit report (the chain's hysteresis link; for an inverse chain, the fit
+    /// from the creep-free displacement to the voltage).
+    pub hysteresis: FitReport,
+    /// The creep link, if identified.
+    pub creep: Option<CreepFit>,
+    /// The vibration link, if identified.
+    pub dynamics: Option<DynamicsFit>,
+    /// Each link's contribution (RMS with and without it).
+    pub contributions: Vec<Contribution>,
+    /// The whole chain's errors over the fitted samples at the full rate (physical units; %
+    /// of the fitted output range).
+    pub fit: ErrorStats,
+    /// Wall-clock time, s.
+    pub elapsed_s: f64,
+}
+
+/// An identified chain: the model file (format version 2 when it has links) and its report.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct ChainIdentification {
+    /// The model file, with the report in its `identification` field.
+    pub model: ModelFile,
+    /// The report.
+    pub report: ChainReport,
+}
+
+/// Identifies the chain from a record (see the [module documentation](self)). `options`
+/// are the MPIM's (the direction decides plant or inverse; the solver must be least squares
+/// when creep is fitted); `chain` adds the links.
+pub fn identify_chain(
+    voltage: &[f64],
+    displacement: &[f64],
+    options: &IdentifyOptions,
+    chain: &ChainOptions,
+) -> Result<ChainIdentification, IdentifyError> {
+    let started = Instant::now();
+    chain.validate()?;
+    if chain.creep.is_some() && options.method != Method::LeastSquares {
+        return Err(IdentifyError::InvalidOption {
+            option: "method",
+            value: "pso".to_owned(),
+            reason: "creep is identified jointly with the hysteresis by least squares; use ls"
+                .to_owned(),
+        });
+    }
+    hystcomp_io::data::check_same_length(&[("voltage", voltage), ("displacement", displacement)])?;
+    let plant_options = IdentifyOptions {
+        direction: Direction::Plant,
+        ..options.clone()
+    };
+    let plant = plant_chain(voltage, displacement, &plant_options, chain)?;
+    let (model, report) = match options.direction {
+        Direction::Plant => (plant.model, plant.report),
+        Direction::Inverse => inverse_chain(voltage, displacement, options, chain, plant)?,
+    };
+    let report = ChainReport {
+        elapsed_s: started.elapsed().as_secs_f64(),
+        ..report
+    };
+    let mut model = model;
+    model.identification = serde_json::to_value(&report).ok();
+    Ok(ChainIdentification { model, report })
+}
+
+/// Where the hysteresis and creep fit ends: at the vibration segment when it lies in the
+/// second half of the record (its fast content, decimated, would alias into their fit), else
+/// at the record's end.
+fn fitted_end(chain: &ChainOptions, len: usize) -> usize {
+    match chain.dynamics.as_ref().and_then(|d| d.segment.clone()) {
+        Some(segment) if segment.start >= len / 2 && segment.start < len => segment.start,
+        _ => len,
+    }
+}
+
+/// Every `k`-th sample.
+fn decimate(values: &[f64], k: usize) -> Vec<f64> {
+    values.iter().step_by(k).copied().collect()
+}
+
+/// The fitted span of a report, in samples of the full-rate record.
+fn full_rate_span(report: &FitReport, decimation: usize, len: usize) -> std::ops::Range<usize> {
+    let start = (report.samples.warmup * decimation).min(len);
+    let end = ((report.samples.warmup + report.samples.fit) * decimation).min(len);
+    start..end
+}
+
+struct Plant {
+    model: ModelFile,
+    report: ChainReport,
+    hysteresis_only: ModelFile,
+}
+
+fn plant_chain(
+    voltage: &[f64],
+    displacement: &[f64],
+    options: &IdentifyOptions,
+    chain: &ChainOptions,
+) -> Result<Plant, IdentifyError> {
+    let k = chain.decimation;
+    let end = fitted_end(chain, voltage.len());
+    let v = decimate(&voltage[..end], k);
+    let y = decimate(&displacement[..end], k);
+    let base: Identification = identify(&v, &y, options)?;
+    let rate = chain.sample_rate_hz;
+    let (mut model, creep_fit, hysteresis_report) = match &chain.creep {
+        None => (base.model.clone(), None, base.report.clone()),
+        Some(creep) => {
+            let (model, fit, report) =
+                joint_creep_fit(&v, &displacement[..end], options, &base, creep, rate, k)?;
+            (model, Some(fit), report)
+        }
+    };
+    let span = full_rate_span(&base.report, k, voltage.len());
+    let y_scale = base.report.output.max - base.report.output.min;
+    let mut dynamics_fit = None;
+    let mut segment = None;
+    if let Some(dynamics) = &chain.dynamics {
+        let x = model.predict(voltage)?;
+        let fit = fit_dynamics(&x, displacement, rate, dynamics)?;
+        segment = Some(dynamics.segment.clone().unwrap_or(0..voltage.len()));
+        let creep = model.creep.clone();
+        model = model.with_links(rate, creep, Some(fit.part.clone()))?;
+        dynamics_fit = Some(fit);
+    }
+    // Contributions: the hysteresis alone, with creep, with vibration.
+    let mut contributions = Vec::new();
+    let mut add = |name: &str, file: &ModelFile| -> Result<(), IdentifyError> {
+        let predicted = file.predict(voltage)?;
+        let rms = |range: std::ops::Range<usize>| {
+            ErrorStats::new(&predicted[range.clone()], &displacement[range], y_scale)
+                .map(|s| s.rms_percent)
+                .unwrap_or(f64::NAN)
+        };
+        contributions.push(Contribution {
+            model: name.to_owned(),
+            rms_percent: rms(span.clone()),
+            segment_rms_percent: segment.clone().map(rms),
+        });
+        Ok(())
+    };
+    add("hysteresis", &base.model)?;
+    if creep_fit.is_some() {
+        let creep_only = model.clone().with_links(rate, model.creep.clone(), None)?;
+        add("+ creep", &creep_only)?;
+    }
+    if dynamics_fit.is_some() {
+        add("+ vibration", &model)?;
+    }
+    let predicted = model.predict(voltage)?;
+    let fit = ErrorStats::new(&predicted[span.clone()], &displacement[span], y_scale).ok_or_else(
+        || IdentifyError::InvalidOption {
+            option: "fitting span",
+            value: "empty".to_owned(),
+            reason: "no fitted samples".to_owned(),
+        },
+    )?;
+    model.description = Some(format!(
+        "MPIM (plant){}{} identified by hystcomp (ls) from {} samples at {} Hz",
+        if creep_fit.is_some() { " + creep" } else { "" },
+        if dynamics_fit.is_some() {
+            " + vibration"
+        } else {
+            ""
+        },
+        voltage.len(),
+        rate
+    ));
+    Ok(Plant {
+        model,
+        report: ChainReport {
+            hysteresis: hysteresis_report,
+            creep: creep_fit,
+            dynamics: dynamics_fit,
+            contributions,
+            fit,
+            elapsed_s: 0.0,
+        },
+        hysteresis_only: base.model,
+    })
+}
+
+/// Step 2 of the module documentation, on the decimated voltage `v` and the full-rate
+/// displacement `displacement` (the creep elements filter it at the full rate, the rate the
+/// model's link runs at, and are then decimated), with the normalisation and fitted span of
+/// the hysteresis-only fit `base`.
+fn joint_creep_fit(
+    v: &[f64],
+    displacement: &[f64],
+    options: &IdentifyOptions,
+    base: &Identification,
+    creep: &CreepOptions,
+    rate: f64,
+    decimation: usize,
+) -> Result<(ModelFile, CreepFit, FitReport), IdentifyError> {
+    let report = &base.report;
+    let (x_min, x_scale) = (report.input.min, report.input.max - report.input.min);
+    let (y_ref, y_scale) = (report.output.min, report.output.max - report.output.min);
+    let origin = displacement[0];
+    let x: Vec<f64> = v.iter().map(|v| (v - x_min) / x_scale).collect();
+    let full: Vec<f64> = displacement.iter().map(|y| (y - y_ref) / y_scale).collect();
+    let yn = decimate(&full, decimation);
+    let period = 1.0 / rate;
+    // The creep elements' outputs at the full rate, at rest at the first sample, decimated.
+    let columns: Vec<Vec<f64>> = creep
+        .time_constants_s
+        .iter()
+        .map(|tau| {
+            let g = 1.0 - (-period / tau).exp();
+            let mut z = full[0];
+            let filtered: Vec<f64> = full
+                .iter()
+                .map(|&value| {
+                    z += g * (value - z);
+                    z
+                })
+                .collect();
+            decimate(&filtered, decimation)
+        })
+        .collect();
+    let column_refs: Vec<&[f64]> = columns.iter().map(|c| c.as_slice()).collect();
+    let fit = report.samples.warmup..report.samples.warmup + report.samples.fit;
+    let thresholds = report.thresholds.clone();
+    let problem = FitProblem::with_extra_columns(
+        ProblemData {
+            input: &x,
+            output: &yn,
+            fit,
+        },
+        &thresholds,
+        Direction::Plant,
+        true,
+        options.margin,
+        &column_refs,
+    )?;
+    let condition = problem.condition_number();
+    if condition.is_nan() || condition > options.max_condition {
+        return Err(IdentifyError::IllConditioned {
+            condition,
+            limit: options.max_condition,
+        });
+    }
+    let solution = LeastSquares.solve(&problem, &mut NoObserver)?;
+    let parameters = problem.parameters(&solution.theta);
+    let weights = problem.extra_parameters(&solution.theta).to_vec();
+    let weight_sum: f64 = weights.iter().sum();
+    let mpim = Mpim::<f64, Vec<f64>>::new(
+        &thresholds,
+        &parameters.weights,
+        parameters.a1,
+        parameters.a2,
+    )?;
+    let slope = mpim.check_invertible(0.0, 1.0)?;
+    let limits = OutputLimits::new(0.0, 1.0)?;
+    for mode in [SolveMode::Exact, SolveMode::Delayed] {
+        Ihc::<f64, Vec<f64>>::new(&mpim, limits, mode)?;
+        Wihc::<f64, Vec<f64>>::new(&mpim, limits, mode)?;
+    }
+    // y - o - sum c_i (z_i[y] - o) = h - o with h = offset + s H: see the derivation in the
+    // module documentation of hystcomp_io::model_file.
+    let offset = (y_ref - origin) * (1.0 - weight_sum) + y_scale * parameters.offset + origin;
+    let part = CreepPart {
+        origin,
+        time_constants_s: creep.time_constants_s.clone(),
+        weights,
+    };
+    let input = base.model.input.clone();
+    let output = Scale {
+        offset,
+        ..base.model.output.clone()
+    };
+    let file = ModelFile::from_model(Direction::Plant, input, output, [0.0, 1.0], &mpim)?
+        .with_links(rate, Some(part.clone()), None)
+        .map_err(|e| IdentifyError::InvalidOption {
+            option: "creep time constants",
+            value: format!("{:?}", creep.time_constants_s),
+            reason: format!("the creep fit is unusable ({e}); give fewer or longer time constants"),
+        })?;
+    let mut hysteresis = report.clone();
+    hysteresis.detail = format!(
+        "joint fit with {} creep elements: {}",
+        part.weights.len(),
+        solution.detail
+    );
+    hysteresis.output_offset = offset;
+    hysteresis.condition_number = condition;
+    hysteresis.constraints = problem.constraints().len();
+    hysteresis.active_constraints = problem.active_count(&solution.theta);
+    hysteresis.violated_constraints = problem.violated_count(&solution.theta);
+    hysteresis.min_branch_slope = slope.slope;
+    Ok((
+        file,
+        CreepFit {
+            part,
+            static_gain: 1.0 / (1.0 - weight_sum),
+            condition_number: condition,
+        },
+        hysteresis,
+    ))
+}
+
+fn inverse_chain(
+    voltage: &[f64],
+    displacement: &[f64],
+    options: &IdentifyOptions,
+    chain: &ChainOptions,
+    plant: Plant,
+) -> Result<(ModelFile, ChainReport), IdentifyError> {
+    let k = chain.decimation;
+    let rate = chain.sample_rate_hz;
+    // The creep-free displacement C^-1[y], creep relaxed at the record's start.
+    let creep_free: Vec<f64> = match &plant.model.creep {
+        Some(c) => {
+            let mut inverse = c.link(rate)?.inverse();
+            displacement.iter().map(|y| inverse.step(*y)).collect()
+        }
+        None => displacement.to_vec(),
+    };
+    let v = decimate(voltage, k);
+    let h = decimate(&creep_free, k);
+    let end = fitted_end(chain, voltage.len()) / k;
+    let inverse = identify(&v[..end], &h[..end], options)?;
+    let base = identify(&v[..end], &decimate(displacement, k)[..end], options)?;
+    let model = inverse.model.clone().with_links(
+        rate,
+        plant.model.creep.clone(),
+        plant.model.vibration.clone(),
+    )?;
+    let span = full_rate_span(&inverse.report, k, voltage.len());
+    let v_scale = inverse.report.output.max - inverse.report.output.min;
+    let segment = chain
+        .dynamics
+        .as_ref()
+        .map(|d| d.segment.clone().unwrap_or(0..voltage.len()));
+    let mut contributions = Vec::new();
+    let mut add = |name: &str, file: &ModelFile| -> Result<(), IdentifyError> {
+        let predicted = file.predict(displacement)?;
+        let rms = |range: std::ops::Range<usize>| {
+            ErrorStats::new(&predicted[range.clone()], &voltage[range], v_scale)
+                .map(|s| s.rms_percent)
+                .unwrap_or(f64::NAN)
+        };
+        contributions.push(Contribution {
+            model: name.to_owned(),
+            rms_percent: rms(span.clone()),
+            segment_rms_percent: segment.clone().map(rms),
+        });
+        Ok(())
+    };
+    add("hysteresis", &base.model)?;
+    if model.creep.is_some() {
+        let creep_only = model.clone().with_links(rate, model.creep.clone(), None)?;
+        add("+ creep", &creep_only)?;
+    }
+    if model.vibration.is_some() {
+        add("+ vibration", &model)?;
+    }
+    let predicted = model.predict(displacement)?;
+    let fit =
+        ErrorStats::new(&predicted[span.clone()], &voltage[span], v_scale).ok_or_else(|| {
+            IdentifyError::InvalidOption {
+                option: "fitting span",
+                value: "empty".to_owned(),
+                reason: "no fitted samples".to_owned(),
+            }
+        })?;
+    let _ = plant.hysteresis_only;
+    Ok((
+        model,
+        ChainReport {
+            hysteresis: inverse.report,
+            creep: plant.report.creep,
+            dynamics: plant.report.dynamics,
+            contributions,
+            fit,
+            elapsed_s: 0.0,
+        },
+    ))
+}
