@@ -313,3 +313,45 @@ fn time_step_other_than_the_stage_period_is_refused() {
     );
     assert!(!output.exists());
 }
+
+#[test]
+fn simulate_reports_the_share_of_samples_at_the_slew_or_rail_limit() {
+    let dir = tempfile::tempdir().unwrap();
+    let write = |name: &str, frequency_hz: f64| {
+        let path = dir.path().join(name);
+        let mut text = String::from("time_s,volts\n");
+        for k in 0..5_000 {
+            let t = k as f64 / 10_000.0;
+            // From rest to 5 V over 0.1 s, then the tone.
+            let rise = 0.5 - 0.5 * (std::f64::consts::PI * (t / 0.1).min(1.0)).cos();
+            let v = rise * (5.0 + 4.0 * (2.0 * std::f64::consts::PI * frequency_hz * t).sin());
+            text.push_str(&format!("{t},{v}\n"));
+        }
+        std::fs::write(&path, text).unwrap();
+        path
+    };
+    let run = |input: &Path| {
+        let output = dir.path().join("out.csv");
+        let out = hystcomp(&["--json", "simulate", "--input", s(input), "-o", s(&output)]);
+        assert!(out.status.success(), "{}", stderr(&out));
+        serde_json::from_slice::<serde_json::Value>(&out.stdout).unwrap()
+    };
+    // 4 V at 2 Hz asks 750 V/s of a 14 300 V/s amplifier; at 100 Hz, 37 700 V/s.
+    let slow = run(&write("slow.csv", 2.0));
+    assert_eq!(slow["clamped"]["slew_limited"], 0);
+    assert_eq!(slow["limited_share"], 0.0);
+    let fast = run(&write("fast.csv", 100.0));
+    let share = fast["limited_share"].as_f64().unwrap();
+    assert!(share > 0.3 && share < 1.0, "{share}");
+    assert!(fast["clamped"]["slew_limited"].as_u64().unwrap() > 1_000);
+    // For people, on stderr.
+    let output = dir.path().join("out.csv");
+    let text = hystcomp(&[
+        "simulate",
+        "--input",
+        s(&write("fast2.csv", 100.0)),
+        "-o",
+        s(&output),
+    ]);
+    assert!(stderr(&text).contains("slew limit"), "{}", stderr(&text));
+}

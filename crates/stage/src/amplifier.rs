@@ -40,13 +40,22 @@ impl Amplifier {
 
     /// Holds `input_v` for one sample; returns the output at the end of the sample and whether
     /// `gain * input_v` lay outside the rails.
+    #[cfg(test)]
     pub(crate) fn step(&mut self, input_v: f64) -> (f64, bool) {
+        let (v, clamped, _) = self.step_limits(input_v);
+        (v, clamped)
+    }
+
+    /// As [`Amplifier::step`], also saying whether the output slewed at the current limit
+    /// during the sample.
+    pub(crate) fn step_limits(&mut self, input_v: f64) -> (f64, bool, bool) {
         let wanted = self.gain * input_v;
         let clamped = wanted < self.min_v || wanted > self.max_v;
         let target = wanted.clamp(self.min_v, self.max_v);
         let error = target - self.output_v;
         let linear_error = self.slew_v_per_s / self.omega;
-        if error.abs() <= linear_error {
+        let slewing = error.abs() > linear_error;
+        if !slewing {
             self.output_v = target - error * self.decay;
         } else {
             let sign = error.signum();
@@ -58,7 +67,7 @@ impl Amplifier {
                 self.output_v = target - sign * linear_error * (-self.omega * rest_s).exp();
             }
         }
-        (self.output_v, clamped)
+        (self.output_v, clamped, slewing)
     }
 }
 

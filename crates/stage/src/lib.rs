@@ -35,6 +35,7 @@ mod config;
 mod converters;
 mod creep;
 mod error;
+mod feasibility;
 pub mod hysteresis;
 mod mechanics;
 mod stage;
@@ -44,6 +45,7 @@ pub use config::{
     HysteresisModel, MechanicsConfig, MpimConfig, PreisachConfig, SensorConfig, StageConfig,
 };
 pub use error::StageError;
+pub use feasibility::{Feasibility, feasibility};
 pub use hysteresis::{
     BoucWenHysteresis, Hysteresis, MpimHysteresis, PreisachHysteresis, RateIndependentHysteresis,
 };

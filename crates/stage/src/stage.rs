@@ -41,6 +41,10 @@ pub struct ClampCounts {
     pub dac_clamped: u64,
     /// Commands whose amplified value lay outside the amplifier's rails (clamped to them).
     pub amplifier_clamped: u64,
+    /// Samples during which the amplifier's output slewed at its current limit
+    /// (`peak_current / load_capacitance`): the drive asked for a faster change than the
+    /// amplifier can deliver into the stack.
+    pub slew_limited: u64,
     /// NaN or infinite commands (the DAC held its previous value).
     pub non_finite: u64,
     /// Sensor readings outside the ADC's span (the measured position saturated at the end of
@@ -208,8 +212,9 @@ impl Stage {
         } else {
             self.clamps.non_finite += 1;
         }
-        let (amplifier_v, clamped) = self.amplifier.step(self.dac_v);
+        let (amplifier_v, clamped, slewing) = self.amplifier.step_limits(self.dac_v);
         self.clamps.amplifier_clamped += u64::from(clamped);
+        self.clamps.slew_limited += u64::from(slewing);
         let hysteresis_um = self.hysteresis.displacement_um(amplifier_v);
         let free_position_um = self.creep.step(hysteresis_um);
         let true_position_um = self.mechanics.step(free_position_um);
@@ -262,6 +267,7 @@ impl Stage {
         response.clamps = ClampCounts {
             dac_clamped: self.clamps.dac_clamped - before.dac_clamped,
             amplifier_clamped: self.clamps.amplifier_clamped - before.amplifier_clamped,
+            slew_limited: self.clamps.slew_limited - before.slew_limited,
             non_finite: self.clamps.non_finite - before.non_finite,
             adc_clamped: self.clamps.adc_clamped - before.adc_clamped,
         };

@@ -126,9 +126,19 @@ fn summary(
         "clamped": {
             "dac": response.clamps.dac_clamped,
             "amplifier": response.clamps.amplifier_clamped,
+            "slew_limited": response.clamps.slew_limited,
             "adc": response.clamps.adc_clamped,
         },
+        "limited_share": limited_share(response),
     })
+}
+
+/// Share of the samples at the amplifier's slew limit or its rails (or beyond the DAC's span),
+/// 0..1 (a sample at two limits counts once per limit; the sum is capped at all of them).
+fn limited_share(response: &hystcomp_stage::StageResponse) -> f64 {
+    let samples = response.command_v.len().max(1) as u64;
+    let c = &response.clamps;
+    (c.slew_limited + c.amplifier_clamped + c.dac_clamped).min(samples) as f64 / samples as f64
 }
 
 /// Runs `hystcomp simulate`.
@@ -184,6 +194,17 @@ pub fn run(args: &Args, ctx: Context) -> Result<(), CliError> {
             time.len() as f64 / config.sample_rate_hz,
             args.output.display()
         )?;
+        if clamped > 0 || response.clamps.slew_limited > 0 {
+            errln!(
+                "{:.2} % of the samples were at the amplifier's slew limit ({:.4} kV/s into the \
+                 stack) or its rails: {} slew-limited, {} beyond the rails, {} beyond the DAC",
+                100.0 * limited_share(&response),
+                config.amplifier.slew_rate_v_per_s() / 1e3,
+                response.clamps.slew_limited,
+                response.clamps.amplifier_clamped,
+                response.clamps.dac_clamped
+            );
+        }
         if clamped > 0 {
             errln!(
                 "warning: {} command samples were outside the DAC span and {} outside the \
