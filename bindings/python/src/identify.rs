@@ -83,7 +83,8 @@ impl Identification {
 /// - ``direction``: ``"plant"`` (voltage to displacement, for IHC and WIHC) or ``"inverse"``
 ///   (displacement to voltage, for DIHC);
 /// - ``warmup``: ``"auto"`` or a number of leading samples excluded from the fit;
-/// - ``holdout``: the fraction of samples at the end held out of the fit and reported;
+/// - ``holdout``: the fraction of samples at the end held out of the fit and reported (0.2,
+///   as ``hystcomp identify``; 0 fits the whole record);
 /// - ``offset``: ``"fit"`` (a constant fitted for the sensor's arbitrary zero), ``"none"`` or a
 ///   physical output offset;
 /// - ``margin``: the smallest branch slope the model must keep (normalised);
@@ -94,7 +95,7 @@ impl Identification {
 /// options and ``IdentificationError`` when no model can be identified (the message says what
 /// to change).
 #[pyfunction]
-#[pyo3(signature = (voltage, displacement, n = 10, method = "ls", direction = "plant", *, seed = 0, thresholds = None, warmup = WarmupArg::Name("auto".into()), holdout = 0.0, offset = OffsetArg::Name("fit".into()), margin = hystcomp_identify::DEFAULT_MARGIN, particles = 40, iterations = 200, polish = false, accept_poor_fit = false, voltage_unit = "V", displacement_unit = "um"))]
+#[pyo3(signature = (voltage, displacement, n = 10, method = "ls", direction = "plant", *, seed = 0, thresholds = None, warmup = WarmupArg::Name("auto".into()), holdout = 0.2, offset = OffsetArg::Name("fit".into()), margin = hystcomp_identify::DEFAULT_MARGIN, particles = 40, iterations = 200, polish = false, accept_poor_fit = false, voltage_unit = "V", displacement_unit = "um"))]
 #[allow(clippy::too_many_arguments)]
 pub fn identify(
     py: Python<'_>,

@@ -4,11 +4,28 @@ use std::fmt;
 
 /// Exit code for bad input (files, data, models, arguments clap could not check).
 pub const EXIT_INPUT: u8 = 1;
+/// Exit code for a usage error: an unknown option, a missing or malformed argument (clap's).
+#[allow(dead_code)] // clap exits with it itself; named here for the list below
+pub const EXIT_USAGE: u8 = 2;
 /// Exit code for a failure while writing results.
 pub const EXIT_OUTPUT: u8 = 3;
 /// Exit code when the work was done but the desired trajectory left the reachable range, so
 /// the drive was clamped to its limits (the output is written; see `--allow-saturation`).
 pub const EXIT_SATURATED: u8 = 4;
+/// Exit code when the work was done and written but an acceptance check failed (`reproduce`;
+/// `--no-check` exits 0 instead).
+pub const EXIT_CHECK_FAILED: u8 = 5;
+
+/// The exit codes, as `--help` shows them and the README lists them (one line each; a new
+/// code gets a constant above and a line here).
+pub const EXIT_CODES_HELP: &str = "\
+Exit status:
+  0  success
+  1  bad input (a file, its data, a model, an option's value)
+  2  usage (an unknown option, a missing or malformed argument)
+  3  an output could not be written
+  4  saturation: the work was done, but the drive was clamped to its limits (compensate)
+  5  an acceptance check failed (reproduce; --no-check exits 0)";
 
 /// An error that ends the command with a message on stderr and a non-zero exit code.
 #[derive(Debug)]

@@ -19,14 +19,20 @@ mod progress;
 
 use std::process::ExitCode;
 
-use clap::{Parser, Subcommand};
+use clap::{CommandFactory, FromArgMatches, Parser, Subcommand};
 
 pub use error::CliError;
 use files::NamesFiles;
 
 /// Feedforward hysteresis compensation for piezoelectric nanopositioners.
 #[derive(Debug, Parser)]
-#[command(name = "hystcomp", version = env!("HYSTCOMP_VERSION"), about, long_about = None)]
+#[command(
+    name = "hystcomp",
+    version = env!("HYSTCOMP_VERSION"),
+    about,
+    long_about = None,
+    after_help = error::EXIT_CODES_HELP
+)]
 struct Cli {
     /// Print results as JSON on stdout (for machines) instead of text.
     #[arg(long, global = true)]
@@ -108,7 +114,9 @@ fn run<A: NamesFiles>(
 }
 
 fn main() -> ExitCode {
-    let cli = Cli::parse();
+    // Every subcommand's --help ends with the exit codes too.
+    let command = Cli::command().mut_subcommands(|s| s.after_help(error::EXIT_CODES_HELP));
+    let cli = Cli::from_arg_matches(&command.get_matches()).unwrap_or_else(|e| e.exit());
     let ctx = Context { json: cli.json };
     let result = match &cli.command {
         Command::Compensate(args) => run(args, ctx, commands::compensate::run),

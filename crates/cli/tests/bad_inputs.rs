@@ -257,7 +257,7 @@ fn overwritten_inputs() -> Vec<(Fixture, Case)> {
             &f.arg("table1-plant.json"),
             "--method",
             "ihc",
-            "--trajectory",
+            "--desired",
             &f.arg("trajectory.csv"),
             "-o",
             output,
@@ -270,7 +270,7 @@ fn overwritten_inputs() -> Vec<(Fixture, Case)> {
             "compensate -o the trajectory",
             compensate(f, &f.arg("trajectory.csv")),
             1,
-            &["--output", "same file as --trajectory", "trajectory.csv"],
+            &["--output", "same file as --desired", "trajectory.csv"],
         )
     });
     add(&|f| {
@@ -287,7 +287,7 @@ fn overwritten_inputs() -> Vec<(Fixture, Case)> {
             "compensate -o the trajectory by a relative path through ..",
             compensate(f, "sub/../trajectory.csv"),
             1,
-            &["same file as --trajectory"],
+            &["same file as --desired"],
         )
     });
     #[cfg(unix)]
@@ -297,7 +297,7 @@ fn overwritten_inputs() -> Vec<(Fixture, Case)> {
             "compensate -o a symbolic link to the trajectory",
             compensate(f, &f.arg("link.csv")),
             1,
-            &["same file as --trajectory"],
+            &["same file as --desired"],
         )
     });
     #[cfg(unix)]
@@ -307,7 +307,7 @@ fn overwritten_inputs() -> Vec<(Fixture, Case)> {
             "compensate -o a hard link to the trajectory",
             compensate(f, &f.arg("hard.csv")),
             1,
-            &["same file as --trajectory"],
+            &["same file as --desired"],
         )
     });
     let simulate = |f: &Fixture, output: &str| -> Vec<String> {
@@ -315,7 +315,7 @@ fn overwritten_inputs() -> Vec<(Fixture, Case)> {
             "simulate",
             "--stage",
             &f.arg("stage.toml"),
-            "--input",
+            "--drive",
             &f.arg("volts.csv"),
             "-o",
             output,
@@ -328,7 +328,7 @@ fn overwritten_inputs() -> Vec<(Fixture, Case)> {
             "simulate -o the input record",
             simulate(f, &f.arg("volts.csv")),
             1,
-            &["same file as --input", "volts.csv"],
+            &["same file as --drive", "volts.csv"],
         )
     });
     add(&|f| {
@@ -417,11 +417,11 @@ fn overwritten_inputs() -> Vec<(Fixture, Case)> {
                 "reproduce",
                 "--stage",
                 &f.arg("report/stage.toml"),
-                "--out",
+                "--output",
                 &f.arg("report"),
             ],
             1,
-            &["--out", "holds the input --stage"],
+            &["--output", "holds the input --stage"],
         )
     });
     cases
@@ -445,7 +445,7 @@ fn the_protected_commands_still_write_new_outputs() {
             &f.arg("table1-plant.json"),
             "--method",
             "ihc",
-            "--trajectory",
+            "--desired",
             &f.arg("trajectory.csv"),
             "-o",
             "drive.csv",
@@ -518,12 +518,12 @@ fn a_closed_stdout_ends_every_command_quietly() {
             "table1-plant.json",
             "--method",
             "ihc",
-            "--trajectory",
+            "--desired",
             "trajectory.csv",
             "-o",
             "drive.csv",
         ],
-        vec!["simulate", "--input", "volts.csv", "-o", "response.csv"],
+        vec!["simulate", "--drive", "volts.csv", "-o", "response.csv"],
         vec!["bench", "--samples", "100", "--repeats", "1"],
     ]
     .into_iter()

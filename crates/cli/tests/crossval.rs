@@ -164,7 +164,7 @@ fn text_report_lists_every_compensator() {
         "1",
         "--method",
         "pso",
-        "--iterations",
+        "--pso-iterations",
         "50",
         "--polish",
     ]);

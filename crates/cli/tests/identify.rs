@@ -319,7 +319,7 @@ fn the_swarm_is_reproducible_from_the_command_line() {
             "pso",
             "--seed",
             seed,
-            "--iterations",
+            "--pso-iterations",
             "60",
             "-o",
             s(&path),

@@ -8,7 +8,7 @@ use common::*;
 fn reproduce_prints_table3_writes_the_report_and_honours_json() {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("report");
-    let o = hystcomp(&["reproduce", "--out", s(&out), "--pso-iterations", "30"]);
+    let o = hystcomp(&["reproduce", "--output", s(&out), "--pso-iterations", "30"]);
     assert!(o.status.success(), "{}", stderr(&o));
     let text = String::from_utf8_lossy(&o.stdout);
     assert!(
@@ -21,7 +21,7 @@ fn reproduce_prints_table3_writes_the_report_and_honours_json() {
 
     let o = hystcomp(&[
         "reproduce",
-        "--out",
+        "--output",
         s(&out),
         "--pso-iterations",
         "30",
@@ -61,7 +61,7 @@ fn reproduce_runs_on_a_stage_file_and_refuses_a_bad_one() {
         "reproduce",
         "--stage",
         s(&stage),
-        "--out",
+        "--output",
         s(&out),
         "--pso-iterations",
         "10",
@@ -75,7 +75,7 @@ fn reproduce_runs_on_a_stage_file_and_refuses_a_bad_one() {
     );
 
     std::fs::write(&stage, "[mechanics]\ndamping_ratio = -1.0\n").unwrap();
-    let o = hystcomp(&["reproduce", "--stage", s(&stage), "--out", s(&out)]);
+    let o = hystcomp(&["reproduce", "--stage", s(&stage), "--output", s(&out)]);
     assert!(!o.status.success());
     assert!(stderr(&o).contains("damping_ratio"), "{}", stderr(&o));
     // A bad value names the file it is in.
@@ -83,7 +83,7 @@ fn reproduce_runs_on_a_stage_file_and_refuses_a_bad_one() {
     let o = hystcomp(&["reproduce", "--stage", "/no/such/stage.toml"]);
     assert!(!o.status.success());
     assert!(stderr(&o).contains("/no/such/stage.toml"), "{}", stderr(&o));
-    let o = hystcomp(&["reproduce", "--periods", "1", "--out", s(&out)]);
+    let o = hystcomp(&["reproduce", "--periods", "1", "--output", s(&out)]);
     assert!(!o.status.success());
     assert!(
         stderr(&o).contains("give 2 to 20 periods"),
@@ -99,22 +99,28 @@ fn reproduce_refuses_options_it_cannot_run_without_aborting() {
     let out = s(&out);
     // Each of these used to abort on a failed allocation or run for minutes.
     assert_fails(
-        &["reproduce", "--out", out, "--periods", "100000"],
+        &["reproduce", "--output", out, "--periods", "100000"],
         &["--periods 100000", "give 2 to 20 periods"],
     );
     assert_fails(
-        &["reproduce", "--out", out, "--pso-iterations", "0"],
+        &["reproduce", "--output", out, "--pso-iterations", "0"],
         &["--pso-iterations 0", "the study's default is 2000"],
     );
     assert_fails(
-        &["reproduce", "--out", out, "--pso-particles", "100000000000"],
+        &[
+            "reproduce",
+            "--output",
+            out,
+            "--pso-particles",
+            "100000000000",
+        ],
         &["--pso-particles 100000000000", "2 to 1000"],
     );
     // A stage that cannot reach the trajectory: 30 um of stroke for a 0-70 um trajectory.
     let stage = dir.path().join("short.toml");
     std::fs::write(&stage, "[hysteresis.preisach]\nstroke_um = 30.0\n").unwrap();
     assert_fails(
-        &["reproduce", "--out", out, "--stage", s(&stage)],
+        &["reproduce", "--output", out, "--stage", s(&stage)],
         &[
             "cannot reach the trajectory",
             "hysteresis.preisach.stroke_um",
@@ -123,7 +129,7 @@ fn reproduce_refuses_options_it_cannot_run_without_aborting() {
     // A sensor whose span is below the trajectory: the measured position would saturate.
     std::fs::write(&stage, "[adc]\nmax_v = 5.0\n").unwrap();
     assert_fails(
-        &["reproduce", "--out", out, "--stage", s(&stage)],
+        &["reproduce", "--output", out, "--stage", s(&stage)],
         &["adc.max_v", "sensor.sensitivity_v_per_um"],
     );
     // A model file that is missing names the field, not the stage file.
@@ -133,7 +139,7 @@ fn reproduce_refuses_options_it_cannot_run_without_aborting() {
     )
     .unwrap();
     assert_fails(
-        &["reproduce", "--out", out, "--stage", s(&stage)],
+        &["reproduce", "--output", out, "--stage", s(&stage)],
         &["hysteresis.mpim.model_file", "nope.json"],
     );
 }
@@ -275,7 +281,7 @@ fn evaluate_computes_the_three_indices_and_refuses_bad_records() {
             "--measured",
             s(&mat),
         ],
-        "no --measured-column given, and no variable measured_position_um to take by default",
+        "no --measured-column given, and no variable measured_um to take by default",
     );
     let o = hystcomp(&[
         "evaluate",
@@ -427,7 +433,7 @@ fn evaluate_reads_simulate_output_by_default_and_checks_times_on_request() {
 fn compensate_simulate_evaluate_chain_tracks_the_paper_trajectory() {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("report");
-    let o = hystcomp(&["reproduce", "--out", s(&out), "--pso-iterations", "10"]);
+    let o = hystcomp(&["reproduce", "--output", s(&out), "--pso-iterations", "10"]);
     assert!(o.status.success(), "{}", stderr(&o));
     let trajectory = hystcomp_experiments::Reference::paper().trajectory();
     let (time, desired) = trajectory.sample(10_000.0, 200_000);
@@ -442,7 +448,7 @@ fn compensate_simulate_evaluate_chain_tracks_the_paper_trajectory() {
         s(&model),
         "--method",
         "ihc",
-        "--trajectory",
+        "--desired",
         s(&desired_file),
         "-o",
         s(&drive),
@@ -451,7 +457,7 @@ fn compensate_simulate_evaluate_chain_tracks_the_paper_trajectory() {
     let stage = dir.path().join("stage.csv");
     let o = hystcomp(&[
         "simulate",
-        "--input",
+        "--drive",
         s(&drive),
         "-o",
         s(&stage),
@@ -467,7 +473,7 @@ fn compensate_simulate_evaluate_chain_tracks_the_paper_trajectory() {
         "--measured",
         s(&stage),
         "--measured-column",
-        "measured_position_um",
+        "measured_um",
         "--rows",
         "100001..200000",
         "--json",

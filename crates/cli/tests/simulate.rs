@@ -41,7 +41,7 @@ fn good_run_writes_every_column_and_a_json_summary() {
     let out = hystcomp(&[
         "--json",
         "simulate",
-        "--input",
+        "--drive",
         s(&input),
         "-o",
         s(&output),
@@ -57,7 +57,7 @@ fn good_run_writes_every_column_and_a_json_summary() {
             "command_v",
             "amplifier_v",
             "true_position_um",
-            "measured_position_um"
+            "measured_um"
         ]
     );
     assert_eq!(rows.len(), 5_000);
@@ -93,7 +93,7 @@ fn good_run_writes_every_column_and_a_json_summary() {
     for (path, seed) in [(&again, "3"), (&other, "4")] {
         let out = hystcomp(&[
             "simulate",
-            "--input",
+            "--drive",
             s(&input),
             "-o",
             s(path),
@@ -140,7 +140,7 @@ fn stage_file_and_named_columns_are_used() {
         "simulate",
         "--stage",
         s(&stage),
-        "--input",
+        "--drive",
         s(&input),
         "--time-column",
         "time",
@@ -178,7 +178,7 @@ max_v = 3.0
         "simulate",
         "--stage",
         s(&stage),
-        "--input",
+        "--drive",
         s(&input),
         "-o",
         s(&output),
@@ -232,7 +232,7 @@ fn bad_stage_file_is_refused_with_the_field_named() {
                 "simulate",
                 "--stage",
                 s(&stage),
-                "--input",
+                "--drive",
                 s(&input),
                 "-o",
                 s(&output),
@@ -249,7 +249,7 @@ fn missing_input_is_refused_with_its_path() {
     let input = dir.path().join("nowhere.csv");
     let output = dir.path().join("out.csv");
     assert_fails(
-        &["simulate", "--input", s(&input), "-o", s(&output)],
+        &["simulate", "--drive", s(&input), "-o", s(&output)],
         &["nowhere.csv"],
     );
     assert!(!output.exists());
@@ -262,7 +262,7 @@ fn nan_in_the_input_is_refused_with_its_row() {
     let output = dir.path().join("out.csv");
     std::fs::write(&input, "time_s,volts\n0,1\n0.0001,NaN\n0.0002,1\n").unwrap();
     assert_fails(
-        &["simulate", "--input", s(&input), "-o", s(&output)],
+        &["simulate", "--drive", s(&input), "-o", s(&output)],
         &["volts.csv", "row 2", "volts"],
     );
     assert!(!output.exists());
@@ -277,7 +277,7 @@ fn wrong_column_is_refused_with_the_column_named() {
     assert_fails(
         &[
             "simulate",
-            "--input",
+            "--drive",
             s(&input),
             "--voltage-column",
             "command",
@@ -289,7 +289,7 @@ fn wrong_column_is_refused_with_the_column_named() {
     assert_fails(
         &[
             "simulate",
-            "--input",
+            "--drive",
             s(&input),
             "--voltage-column",
             "7",
@@ -308,7 +308,7 @@ fn time_step_other_than_the_stage_period_is_refused() {
     let output = dir.path().join("out.csv");
     write_input(&input, 1_000.0, 100);
     assert_fails(
-        &["simulate", "--input", s(&input), "-o", s(&output)],
+        &["simulate", "--drive", s(&input), "-o", s(&output)],
         &["time step", "10000 Hz", "sample_rate_hz = 1000"],
     );
     assert!(!output.exists());

@@ -44,6 +44,10 @@ pub struct StudySummary {
     pub ablations: Vec<AblationRun>,
     /// Wall-clock time of the study's computations (not the figures or the report), s.
     pub elapsed_s: f64,
+    /// Samples left out at the start of the identification record (0: it starts from rest).
+    pub identification_warmup_samples: usize,
+    /// Fraction of the identification record held out of the fit (0: fitted whole).
+    pub identification_holdout: f64,
     /// The CSV files beside `study.json` holding every series the figures show (written by
     /// [`write_outputs`]; empty in a summary that was only computed).
     pub series: Vec<SeriesFile>,
@@ -243,6 +247,8 @@ pub fn summarize(study: &Study) -> StudySummary {
         noise_floor: study.noise_floor.clone(),
         ablations: study.ablations.clone(),
         elapsed_s: study.elapsed_s,
+        identification_warmup_samples: 0,
+        identification_holdout: 0.0,
         series: Vec::new(),
     }
 }
@@ -333,6 +339,11 @@ impl fmt::Display for StudySummary {
             floor.seeds.len(),
             floor.e_rms_spread_percent,
             floor.e_mhe_spread_percent
+        )?;
+        writeln!(
+            f,
+            "identification: warm-up {} samples, hold-out {} (from rest, the whole record)",
+            self.identification_warmup_samples, self.identification_holdout
         )?;
         writeln!(f, "ablation, exact IHC (e_mhe / e_rms, %):")?;
         for a in &self.ablations {
@@ -1536,6 +1547,11 @@ pub fn write_outputs(
                 ),
             ),
             Fact::new("play operators", study.options.operators),
+            Fact::new(
+                "identification warm-up and hold-out",
+                "0 samples and none: the record starts from rest (known operator memory) and is \
+                 fitted whole (hystcomp identify defaults to --warmup auto --holdout 0.2)",
+            ),
             Fact::new("e_mhe bins", bins),
             Fact::new(
                 "feedforward gain (uncompensated)",

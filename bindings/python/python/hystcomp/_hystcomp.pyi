@@ -278,7 +278,7 @@ def identify(
     seed: int = 0,
     thresholds: Optional[ArrayLike] = None,
     warmup: Union[str, int] = "auto",
-    holdout: float = 0.0,
+    holdout: float = 0.2,
     offset: Union[str, float] = "fit",
     margin: float = 0.001,
     particles: int = 40,
@@ -298,7 +298,8 @@ def identify(
     - ``direction``: ``"plant"`` (voltage to displacement, for IHC and WIHC) or ``"inverse"``
       (displacement to voltage, for DIHC);
     - ``warmup``: ``"auto"`` or a number of leading samples excluded from the fit;
-    - ``holdout``: the fraction of samples at the end held out of the fit and reported;
+    - ``holdout``: the fraction of samples at the end held out of the fit and reported (0.2,
+      as ``hystcomp identify``; 0 fits the whole record);
     - ``offset``: ``"fit"`` (a constant fitted for the sensor's arbitrary zero), ``"none"`` or a
       physical output offset;
     - ``margin``: the smallest branch slope the model must keep (normalised);

@@ -230,5 +230,7 @@ class StudySummary(_Report):
     noise_floor: Dict[str, Any]
     ablations: List[Dict[str, Any]]
     elapsed_s: float
+    identification_warmup_samples: int = 0
+    identification_holdout: float = 0.0
     series: List[SeriesFile] = field(default_factory=list)
     extra: Dict[str, Any] = field(default_factory=dict)

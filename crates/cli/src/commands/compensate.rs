@@ -22,7 +22,7 @@ pub struct Args {
     method: Method,
     /// Desired trajectory: a CSV (or tab / whitespace separated, or .mat) file with a time
     /// column (s) and a desired position column (in the model's displacement unit).
-    #[arg(long, value_name = "FILE")]
+    #[arg(long = "desired", alias = "trajectory", value_name = "FILE")]
     trajectory: PathBuf,
     /// Where to write the drive signal (CSV: time, drive voltage, desired position; the drive
     /// is the second column, which `hystcomp simulate` reads by default).
@@ -55,7 +55,7 @@ impl NamesFiles for Args {
     fn files(&self) -> Files<'_> {
         Files::new()
             .input("--model", &self.model)
-            .input("--trajectory", &self.trajectory)
+            .input("--desired", &self.trajectory)
             .output("--output", &self.output)
     }
 }
@@ -162,7 +162,7 @@ pub fn run(args: &Args, ctx: Context) -> Result<(), CliError> {
 
     let time_name = columns.names[0].clone();
     let desired_name = format!("desired_{}", compensator.desired_unit());
-    let control_name = format!("drive_{}", compensator.control_unit());
+    let control_name = format!("drive_{}", compensator.control_unit().to_lowercase());
     data::write_csv(
         &args.output,
         &[&time_name, &control_name, &desired_name],

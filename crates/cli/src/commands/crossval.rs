@@ -214,8 +214,8 @@ pub fn run(args: &Args, ctx: Context) -> Result<(), CliError> {
     outln!(
         "  offline inverse replay (measured displacement in, voltage out, vs the voltage \
          applied; % of the test voltage range, limits {} .. {} {}):",
-        t.voltage_limits[0],
-        t.voltage_limits[1],
+        crate::number(t.voltage_limits[0]),
+        crate::number(t.voltage_limits[1]),
         c.voltage_unit
     )?;
     outln!(

@@ -23,8 +23,8 @@ pub struct Args {
     #[arg(long, default_value = "2", value_name = "COLUMN")]
     desired_column: Column,
     /// Column of y in the measured file, by name or 1-based index. Default: the column named
-    /// `measured_position_um` when the file has one (a `hystcomp simulate` output), else
-    /// column 2.
+    /// `measured_um` when the file has one (a `hystcomp simulate` output; also its former name
+    /// `measured_position_um`), else column 2.
     #[arg(long, value_name = "COLUMN")]
     measured_column: Option<Column>,
     /// Time column (s), by name or 1-based index, in both files: when given, the two files'
@@ -75,7 +75,9 @@ struct Report {
 }
 
 /// The name `hystcomp simulate` gives its measured position.
-const SIMULATE_MEASURED: &str = "measured_position_um";
+const SIMULATE_MEASURED: &str = "measured_um";
+/// What `hystcomp simulate` called it before 0.2 (read for one release).
+const SIMULATE_MEASURED_OLD: &str = "measured_position_um";
 
 /// Reads `value` (and `time`, when given) from `path`.
 fn read(
@@ -164,7 +166,15 @@ pub fn run(args: &Args, ctx: Context) -> Result<(), CliError> {
         Some(column) => read(&args.measured, column, time, &options)?,
         None => {
             let named = Column::Name(SIMULATE_MEASURED.to_string());
-            match read(&args.measured, &named, time, &options) {
+            let old = Column::Name(SIMULATE_MEASURED_OLD.to_string());
+            let by_name = match read(&args.measured, &named, time, &options) {
+                Err(DataError::NoSuchColumn { .. } | DataError::NoSuchVariable { .. }) => {
+                    read(&args.measured, &old, time, &options)
+                        .or_else(|_| read(&args.measured, &named, time, &options))
+                }
+                other => other,
+            };
+            match by_name {
                 // No such column in a text file: the second column. A MAT-file's variables
                 // have no order, so there the name must be given.
                 Err(DataError::NoSuchColumn { .. }) => {

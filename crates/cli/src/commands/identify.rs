@@ -114,10 +114,20 @@ pub struct FitArgs {
     #[arg(long, default_value_t = 0)]
     pub seed: u64,
     /// pso: number of particles (2 to 1000).
-    #[arg(long, default_value_t = 40, value_name = "N")]
+    #[arg(
+        long = "pso-particles",
+        alias = "particles",
+        default_value_t = 40,
+        value_name = "N"
+    )]
     pub particles: usize,
     /// pso: number of iterations (1 to 100000).
-    #[arg(long, default_value_t = 200, value_name = "N")]
+    #[arg(
+        long = "pso-iterations",
+        alias = "iterations",
+        default_value_t = 200,
+        value_name = "N"
+    )]
     pub iterations: usize,
     /// pso: inertia weight at the first and last iteration, START,END (linear in between;
     /// default 0.7298 throughout, Clerc & Kennedy's constriction; Shi & Eberhart use 0.9,0.4).
@@ -374,13 +384,13 @@ impl FitArgs {
             )?;
         }
         bounds::count(
-            "--particles",
+            "--pso-particles",
             self.particles,
             2..=MAX_PARTICLES,
             "particles (the default is 40)",
         )?;
         bounds::count(
-            "--iterations",
+            "--pso-iterations",
             self.iterations,
             1..=MAX_ITERATIONS,
             "iterations (the default is 200)",
@@ -523,12 +533,12 @@ pub fn print_fit(report: &hystcomp_identify::FitReport) -> Result<(), CliError> 
         "  {} {} .. {} {} -> {} {} .. {} {} (fitted ranges; {} play operator{}, condition \
          number {:.3e})",
         report.input.quantity,
-        report.input.min,
-        report.input.max,
+        crate::number(report.input.min),
+        crate::number(report.input.max),
         report.input.unit,
         report.output.quantity,
-        report.output.min,
-        report.output.max,
+        crate::number(report.output.min),
+        crate::number(report.output.max),
         unit,
         report.thresholds.len(),
         if report.thresholds.len() == 1 {

@@ -19,7 +19,13 @@ pub struct Args {
     #[arg(long, value_name = "FILE")]
     stage: Option<PathBuf>,
     /// Directory for the report, the figures and the identified models.
-    #[arg(long, default_value = "report", value_name = "DIR")]
+    #[arg(
+        short = 'o',
+        long = "output",
+        alias = "out",
+        default_value = "report",
+        value_name = "DIR"
+    )]
     out: PathBuf,
     /// Seed of the stage noise (identification run; the tracking runs use seed + 1) and of the
     /// particle swarm [default: the stage file's `seed`, 1 for the built-in stage].
@@ -31,6 +37,10 @@ pub struct Args {
     /// Particles of the `paper` pipeline's swarm (2 to 1000).
     #[arg(long, default_value_t = 40)]
     pso_particles: usize,
+    /// Exit with status 0 even when an acceptance check fails (by default such a run writes
+    /// everything, then exits with status 5).
+    #[arg(long)]
+    no_check: bool,
     /// Periods of the paper's trajectory to track (10 s each; indices on the last; 2 to 20).
     #[arg(long, default_value_t = 2)]
     periods: usize,
@@ -40,7 +50,7 @@ impl NamesFiles for Args {
     fn files(&self) -> Files<'_> {
         Files::new()
             .maybe_input("--stage", self.stage.as_ref())
-            .output_directory("--out", &self.out)
+            .output_directory("--output", &self.out)
     }
 }
 
@@ -160,6 +170,31 @@ pub fn run(args: &Args, ctx: Context) -> Result<(), CliError> {
             files.report.display(),
             study.elapsed_s
         )?;
+    }
+    let missed: Vec<String> = summary
+        .acceptance
+        .iter()
+        .filter(|c| !c.passed)
+        .map(|c| {
+            format!(
+                "{} = {} % (bound {})",
+                c.what,
+                crate::number(c.value),
+                c.bound
+            )
+        })
+        .collect();
+    if !missed.is_empty() && !args.no_check {
+        return Err(CliError::with_code(
+            format!(
+                "{} of {} acceptance checks failed ({}); the report is written; --no-check \
+                 exits 0",
+                missed.len(),
+                summary.acceptance.len(),
+                missed.join("; ")
+            ),
+            crate::error::EXIT_CHECK_FAILED,
+        ));
     }
     Ok(())
 }

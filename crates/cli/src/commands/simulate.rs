@@ -19,11 +19,11 @@ pub struct Args {
     /// Input record (CSV, other delimited text or .mat) with a time column (s) and a command
     /// voltage column (V, the controller's DAC output, nominally 0..10 V). The time step must
     /// be the stage's sample period.
-    #[arg(long, value_name = "VOLTS.csv")]
+    #[arg(long = "drive", alias = "input", value_name = "VOLTS.csv")]
     pub input: PathBuf,
 
     /// Output CSV, one row per input sample: time_s, command_v, amplifier_v,
-    /// true_position_um, measured_position_um (positions at the end of each sample period).
+    /// true_position_um, measured_um (positions at the end of each sample period).
     #[arg(short = 'o', long = "output", value_name = "OUT.csv")]
     pub output: PathBuf,
 
@@ -45,7 +45,7 @@ impl NamesFiles for Args {
     fn files(&self) -> Files<'_> {
         Files::new()
             .maybe_input("--stage", self.stage.as_ref())
-            .input("--input", &self.input)
+            .input("--drive", &self.input)
             .output("--output", &self.output)
     }
 }
@@ -59,7 +59,7 @@ const HEADER: [&str; 5] = [
     "command_v",
     "amplifier_v",
     "true_position_um",
-    "measured_position_um",
+    "measured_um",
 ];
 
 fn data_error(error: DataError) -> CliError {
