@@ -9,9 +9,9 @@ use std::fs;
 use std::path::PathBuf;
 
 use hystcomp_io::data::{
-    Column, DataError, Delimiter, Header, ReadOptions, RowRange, check_finite, check_min_samples,
-    check_not_constant, check_same_length, check_time_increasing, read_columns, write_csv,
-    write_delimited,
+    Column, DataError, Delimiter, Header, MAX_MAGNITUDE, ReadOptions, RowRange, check_finite,
+    check_min_samples, check_not_constant, check_same_length, check_time_increasing, read_columns,
+    write_csv, write_delimited,
 };
 use proptest::prelude::*;
 
@@ -26,14 +26,26 @@ const ALL_DELIMITERS: [Delimiter; 4] = [
 // Round trips (property tests, fixed seed)
 // ---------------------------------------------------------------------------------------------
 
-/// Any finite f64, from subnormals to the largest, plus values of everyday size.
+/// `x` scaled by powers of two (which keeps its mantissa) into the magnitude a record may hold.
+fn within_magnitude(mut x: f64) -> f64 {
+    while x.abs() > MAX_MAGNITUDE {
+        x /= 2f64.powi(64);
+    }
+    x
+}
+
+/// Any f64 a record may hold, from subnormals to the largest magnitude (1e15), with every
+/// mantissa, plus values of everyday size.
 fn finite() -> impl Strategy<Value = f64> {
     prop_oneof![
-        prop::num::f64::POSITIVE
+        (prop::num::f64::POSITIVE
             | prop::num::f64::NEGATIVE
             | prop::num::f64::NORMAL
             | prop::num::f64::SUBNORMAL
-            | prop::num::f64::ZERO,
+            | prop::num::f64::ZERO)
+            .prop_map(within_magnitude),
+        Just(MAX_MAGNITUDE),
+        Just(-MAX_MAGNITUDE),
         -1e3..1e3_f64,
         (-100_000i32..100_000).prop_map(|k| f64::from(k) / 1000.0),
     ]
@@ -131,16 +143,16 @@ fn write_csv_writes_the_shortest_exact_text() {
     write_csv(
         &path,
         &["time_s", "voltage, V"],
-        &[&[0.0, 0.005, 1e-7], &[1.8, -0.0, 1e300]],
+        &[&[0.0, 0.005, 1e-7], &[1.8, -0.0, 1e15]],
     )
     .expect("writing");
     let text = fs::read_to_string(&path).expect("reading the text");
     assert_eq!(
         text,
-        "time_s,\"voltage, V\"\n0.0,1.8\n0.005,-0.0\n1e-7,1e300\n"
+        "time_s,\"voltage, V\"\n0.0,1.8\n0.005,-0.0\n1e-7,1000000000000000.0\n"
     );
     let read = read(&path, &["voltage, V"]).expect("reading a quoted name back");
-    assert_eq!(bits(&read.values[0]), bits(&[1.8, -0.0, 1e300]));
+    assert_eq!(bits(&read.values[0]), bits(&[1.8, -0.0, 1e15]));
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -239,6 +251,120 @@ fn non_utf8_header_bytes_do_not_stop_the_numbers() {
     assert!(read.names[0].starts_with("Position ("));
 }
 
+/// Files Excel and European locales write (issue 13, "valid files refused today"): decimal
+/// commas in semicolon, tab or space delimited files, Excel's `sep=` first line, rows of empty
+/// fields (`,,,,`) at the end or between rows, a line of units under the header.
+#[test]
+fn excel_and_european_files_are_read() {
+    let dir = dir();
+    /// File name, contents, columns read, the values expected.
+    type Case<'a> = (&'a str, &'a str, &'a [&'a str], Vec<Vec<f64>>);
+    let cases: [Case; 7] = [
+        (
+            "semicolon.csv",
+            "Zeit;Spannung;Weg\n0,000;1,5;-2,25\n0,001;1,75;-2,5\n",
+            &["Spannung", "Weg"],
+            vec![vec![1.5, 1.75], vec![-2.25, -2.5]],
+        ),
+        (
+            "tabs.txt",
+            "t\tu\n0\t1,5\n1\t2,5e-3\n",
+            &["u"],
+            vec![vec![1.5, 2.5e-3]],
+        ),
+        (
+            "spaces.dat",
+            "0 1,5\n1 -0,25\n",
+            &["2"],
+            vec![vec![1.5, -0.25]],
+        ),
+        (
+            "sep.csv",
+            "sep=;\r\nt;u\r\n0;1,5\r\n1;2\r\n",
+            &["t", "u"],
+            vec![vec![0.0, 1.0], vec![1.5, 2.0]],
+        ),
+        (
+            "empty-rows.csv",
+            "t,u\n0,1\n,\n1,2\n,,\n,\n;;\n",
+            &["u"],
+            vec![vec![1.0, 2.0]],
+        ),
+        (
+            "units.csv",
+            "time,voltage,displacement\ns,V,um\n0,1,2\n1,2,3\n",
+            &["displacement"],
+            vec![vec![2.0, 3.0]],
+        ),
+        (
+            "excel.csv",
+            "sep=;\r\nZeit;Spannung\r\n(s);[V]\r\n0;1,5\r\n0,1;2,5\r\n;\r\n;\r\n",
+            &["Zeit", "Spannung"],
+            vec![vec![0.0, 0.1], vec![1.5, 2.5]],
+        ),
+    ];
+    for (name, text, columns, expected) in cases {
+        let path = file(dir.path(), name, text);
+        let read = read(&path, columns).unwrap_or_else(|e| panic!("{name}: {e}"));
+        assert_eq!(read.values, expected, "{name}");
+        assert_eq!(read.first_row, 1, "{name}");
+    }
+    // The units line is part of the header: rows count from the first line of numbers.
+    let path = file(dir.path(), "units-rows.csv", "t,u\ns,V\n0,10\n1,11\n2,12\n");
+    let options = ReadOptions {
+        rows: Some("2..3".parse().unwrap()),
+        ..ReadOptions::default()
+    };
+    assert_eq!(
+        read_with(&path, &["u"], &options).unwrap().values,
+        vec![vec![11.0, 12.0]]
+    );
+    // A second line that holds a number is data, and refused as such with the hint.
+    let path = file(dir.path(), "half.csv", "t,u\ns,1000\n0,1\n");
+    let (_, message) = read_error(&path, &["t"], &ReadOptions::default());
+    assert_contains(&message, &["line 2", "\"s\"", "names or units"]);
+}
+
+/// UTF-16 text, as Excel's "Unicode text" and PowerShell write it, with or without a
+/// byte-order mark, either byte order: read as text, not refused as binary.
+#[test]
+fn utf16_text_is_read() {
+    let dir = dir();
+    let text = "t\tu\r\n0\t1.5\r\n1\t-2\r\n";
+    let little: Vec<u8> = text.encode_utf16().flat_map(u16::to_le_bytes).collect();
+    let big: Vec<u8> = text.encode_utf16().flat_map(u16::to_be_bytes).collect();
+    for (name, bom, body) in [
+        ("le-bom.txt", &[0xff, 0xfe][..], &little),
+        ("be-bom.txt", &[0xfe, 0xff][..], &big),
+        ("le.txt", &[][..], &little),
+        ("be.txt", &[][..], &big),
+    ] {
+        let mut bytes = bom.to_vec();
+        bytes.extend_from_slice(body);
+        let path = file(dir.path(), name, bytes);
+        let read = read(&path, &["t", "u"]).unwrap_or_else(|e| panic!("{name}: {e}"));
+        assert_eq!(read.values, vec![vec![0.0, 1.0], vec![1.5, -2.0]], "{name}");
+    }
+}
+
+/// Values beyond 1e15 in magnitude are refused when read (a sample of 1e308 made e_rms inf
+/// and e_mhe 0 %), naming the file, line, row and column; 1e15 itself is read.
+#[test]
+fn values_beyond_the_magnitude_bound_are_refused() {
+    let dir = dir();
+    let path = file(dir.path(), "big.csv", "t,u\n0,1e15\n1,-1e15\n");
+    assert_eq!(read(&path, &["u"]).unwrap().values, vec![vec![1e15, -1e15]]);
+    for value in ["1e16", "-1.0000001e15", "1e308"] {
+        let path = file(dir.path(), "huge.csv", format!("t,u\n0,1\n1,{value}\n"));
+        let (error, message) = read_error(&path, &["u"], &ReadOptions::default());
+        assert!(
+            matches!(error, DataError::OutOfRange { row: 2, .. }),
+            "{error:?}"
+        );
+        assert_contains(&message, &["huge.csv", "line 3", "row 2", "\"u\"", "1e15"]);
+    }
+}
+
 // ---------------------------------------------------------------------------------------------
 // Text formats refused
 // ---------------------------------------------------------------------------------------------
@@ -323,9 +449,10 @@ fn a_field_that_is_not_a_number_is_located() {
         &["bad.csv", "line 3", "\"u\" (column 2)", "\"oops\""],
     );
 
-    let path = file(dir.path(), "comma.csv", "t;u\n0;1,5\n");
+    // A decimal comma where the comma separates the fields (quoted, or it would split).
+    let path = file(dir.path(), "comma.csv", "t,u\n0,\"1,5\"\n");
     let (_, message) = read_error(&path, &["u"], &ReadOptions::default());
-    assert_contains(&message, &["\"1,5\"", "decimal commas"]);
+    assert_contains(&message, &["\"1,5\"", "decimal comma", "semicolons"]);
 
     let path = file(
         dir.path(),

@@ -177,12 +177,12 @@ fn level5_every_numeric_class_reads() {
                     Variable {
                         name: "f32",
                         dims: &[1, 3],
-                        values: Values::Single(&[0.1, -2.5, 3e38]),
+                        values: Values::Single(&[0.1, -2.5, 3e14]),
                     },
                     Variable {
                         name: "u64",
                         dims: &[3, 1],
-                        values: Values::UInt64(&[0, 1 << 53, u64::MAX]),
+                        values: Values::UInt64(&[0, 1 << 49, 999_999_999_999_999]),
                     },
                 ],
                 big_endian,
@@ -194,10 +194,41 @@ fn level5_every_numeric_class_reads() {
             assert_eq!(read.values[1], [-128.0, 0.0, 127.0]);
             assert_eq!(
                 read.values[2],
-                [f64::from(0.1f32), -2.5, f64::from(3e38f32)]
+                [f64::from(0.1f32), -2.5, f64::from(3e14f32)]
             );
-            assert_eq!(read.values[3], [0.0, 2f64.powi(53), u64::MAX as f64]);
+            assert_eq!(read.values[3], [0.0, 2f64.powi(49), 999_999_999_999_999.0]);
         }
+    }
+}
+
+/// Values beyond 1e15 in magnitude are refused when read, as in text files (their squares
+/// and sums would overflow the indices), with the variable and the sample.
+#[test]
+fn level5_values_beyond_the_magnitude_bound_are_refused() {
+    let dir = dir();
+    let path = file(
+        dir.path(),
+        "huge.mat",
+        mat5::file(
+            &[
+                var("u", &[3, 1], &[1.0, 1e300, 3.0]),
+                Variable {
+                    name: "n",
+                    dims: &[2, 1],
+                    values: Values::UInt64(&[1, u64::MAX]),
+                },
+            ],
+            false,
+            true,
+        ),
+    );
+    for (column, sample) in [("u", "sample 2"), ("n", "sample 2")] {
+        let (error, message) = read_error(&path, &[column], &ReadOptions::default());
+        assert!(
+            matches!(error, DataError::OutOfRange { row: 2, .. }),
+            "{error:?}"
+        );
+        assert_contains(&message, &["huge.mat", sample, "1e15"]);
     }
 }
 
@@ -480,7 +511,14 @@ mod properties {
                 prop::collection::vec((-30_000i32..30_000).prop_map(f64::from), n).boxed()
             } else {
                 prop::collection::vec(
-                    prop::num::f64::NORMAL | prop::num::f64::SUBNORMAL | prop::num::f64::ZERO,
+                    (prop::num::f64::NORMAL | prop::num::f64::SUBNORMAL | prop::num::f64::ZERO)
+                        .prop_map(|mut x| {
+                            // Scaled by powers of two into the magnitude a record may hold.
+                            while x.abs() > 1e15 {
+                                x /= 2f64.powi(64);
+                            }
+                            x
+                        }),
                     n,
                 )
                 .boxed()

@@ -80,6 +80,19 @@ pub enum DataError {
         /// The value.
         value: f64,
     },
+    /// A value beyond [`MAX_MAGNITUDE`](super::MAX_MAGNITUDE) in magnitude.
+    OutOfRange {
+        /// The file.
+        path: PathBuf,
+        /// The line of a text file, counted from 1.
+        line: Option<usize>,
+        /// The row of data (or sample), counted from 1.
+        row: usize,
+        /// The column's name.
+        column: String,
+        /// The value.
+        value: f64,
+    },
     /// A selected column does not exist in a text file.
     NoSuchColumn {
         /// The file.
@@ -297,11 +310,15 @@ impl fmt::Display for DataError {
                 if text.is_empty() {
                     f.write_str(" (the field is empty: a missing value?)")
                 } else if text.contains(',') && text.replace(',', ".").parse::<f64>().is_ok() {
-                    f.write_str(" (decimal commas are not supported: write 1.5, not 1,5)")
+                    f.write_str(
+                        " (a decimal comma in a file whose fields the comma separates: save it \
+                         with semicolons between fields, as Excel does in European locales, or \
+                         write 1.5)",
+                    )
                 } else {
                     f.write_str(
-                        " (select a numeric column, or set the header option if this line \
-                         holds names)",
+                        " (select a numeric column; if this line holds names or units, select \
+                         the rows after it, or set the header option)",
                     )
                 }
             }
@@ -323,6 +340,26 @@ impl fmt::Display for DataError {
                     f,
                     ": {value} is not a finite number; remove or fill in the missing or \
                      overflowed samples, or select a row range without them"
+                )
+            }
+            DataError::OutOfRange {
+                path,
+                line,
+                row,
+                column,
+                value,
+            } => {
+                match line {
+                    Some(line) => {
+                        write!(f, "{}, line {line} (row {row}), {column}", path.display())?
+                    }
+                    None => write!(f, "{}, {column}, sample {row}", path.display())?,
+                }
+                write!(
+                    f,
+                    ": {value:e} is beyond {:e} in magnitude, the largest a record may hold; \
+                     check the column's unit (or scale factor), or select rows without it",
+                    super::MAX_MAGNITUDE
                 )
             }
             DataError::NoSuchColumn {

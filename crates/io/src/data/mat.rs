@@ -5,7 +5,7 @@ use std::path::Path;
 
 use super::error::shape_text;
 use super::level5::{self, MAX_MAT_VALUES, Variable};
-use super::{Column, Columns, DataError, ReadOptions, check_row_range};
+use super::{Column, Columns, DataError, MAX_MAGNITUDE, ReadOptions, check_row_range};
 
 /// Reads the selected columns of a Level-5 MAT-file held in `bytes` (`path` names it in
 /// messages).
@@ -85,6 +85,15 @@ pub(super) fn read_mat(
         if let Some(i) = column.iter().position(|v| !v.is_finite()) {
             return Err(DataError::NotFinite {
                 path: Some(path.to_owned()),
+                line: None,
+                row: first + i,
+                column: format!("variable \"{name}\""),
+                value: column[i],
+            });
+        }
+        if let Some(i) = column.iter().position(|v| v.abs() > MAX_MAGNITUDE) {
+            return Err(DataError::OutOfRange {
+                path: path.to_owned(),
                 line: None,
                 row: first + i,
                 column: format!("variable \"{name}\""),

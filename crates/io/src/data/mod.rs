@@ -12,19 +12,29 @@
 //!
 //! ## Delimited text
 //!
-//! - **Lines.** Lines end in `\n` or `\r\n`. Blank lines (only spaces and tabs) and comment
-//!   lines, whose first non-blank character is `#` or `%`, are skipped anywhere in the file;
-//!   comments after numbers on the same line are not supported. A UTF-8 byte-order mark is
-//!   ignored; bytes that are not UTF-8 (e.g. a Latin-1 `µ` in a header) become U+FFFD and do
-//!   not stop numbers from being read.
-//! - **Delimiter** ([`Delimiter`]). `Auto` looks at the first line that is neither blank nor a
-//!   comment: a tab there means tab-separated, else a comma means comma-separated, else a
-//!   semicolon means semicolon-separated, else fields are separated by runs of spaces or tabs.
-//!   Comma, tab and semicolon files are split by the `csv` crate (double quotes allowed, spaces
-//!   around fields trimmed); whitespace-separated files have no quoting.
+//! - **Encoding.** UTF-8 (a byte-order mark is ignored; bytes that are not UTF-8, e.g. a
+//!   Latin-1 `µ` in a header, become U+FFFD and do not stop numbers from being read) or UTF-16
+//!   in either byte order, as Excel's "Unicode text" and PowerShell write it (with a byte-order
+//!   mark, or recognised by its zero bytes).
+//! - **Lines.** Lines end in `\n` or `\r\n`. Blank lines (only spaces and tabs), comment
+//!   lines, whose first non-blank character is `#` or `%`, and rows of empty fields (only
+//!   commas, semicolons, tabs and spaces, as Excel writes `,,,,` for formatted empty rows) are
+//!   skipped anywhere in the file; comments after numbers on the same line are not supported.
+//! - **Delimiter** ([`Delimiter`]). Excel's first line `sep=;` (or `sep=,`) names it and is
+//!   skipped. Otherwise `Auto` looks at the first line that is neither blank nor a comment: a
+//!   tab there means tab-separated, else a semicolon means semicolon-separated, else a comma
+//!   means comma-separated (unless the line is numbers with decimal commas between spaces),
+//!   else fields are separated by runs of spaces or tabs. Comma, tab and semicolon files are
+//!   split by the `csv` crate (double quotes allowed, spaces around fields trimmed);
+//!   whitespace-separated files have no quoting.
+//! - **Numbers.** Decimal points; in files not separated by commas also decimal commas
+//!   (`1,5`: one comma and no point), as European locales write them. Selected values must be
+//!   finite and at most [`MAX_MAGNITUDE`] (1e15) in magnitude.
 //! - **Header** ([`Header`]). `Auto` takes the first non-blank, non-comment line as a header
 //!   when any of its non-empty fields is not a number (`NaN`, `Inf` and `-Inf` count as
-//!   numbers). Header names are trimmed; an empty name becomes `column k`.
+//!   numbers). Header names are trimmed; an empty name becomes `column k`. A line right under
+//!   the header whose fields are all names, not numbers (units: `s,V,um`), belongs to the
+//!   header.
 //! - **Shape.** Every record must have as many fields as the first one (the header, if any),
 //!   or the file is refused as ragged with both line numbers. Only the selected columns of the
 //!   selected rows must hold finite numbers: other columns may hold text.
@@ -78,6 +88,11 @@ pub use write::{write_csv, write_delimited};
 use std::fmt;
 use std::path::{Path, PathBuf};
 use std::str::FromStr;
+
+/// The largest magnitude a value of a record may have (1e15): larger values are refused when
+/// the file is read ([`DataError::OutOfRange`]), so that the squares and sums of the indices
+/// and fits stay finite (a sample of 1e308 turned e_rms into inf and e_mhe into 0).
+pub const MAX_MAGNITUDE: f64 = 1e15;
 
 /// The largest file [`read_columns`] reads (2 GiB); a larger one is refused before it is
 /// read ([`DataError::TooLarge`]).
@@ -144,34 +159,21 @@ impl fmt::Display for Column {
 /// What separates the fields of a text file.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
 pub enum Delimiter {
-    /// Decide from the first non-blank, non-comment line: tab, else comma, else semicolon,
-    /// else runs of whitespace.
+    /// Excel's `sep=` line, else decide from the first non-blank, non-comment line: tab, else
+    /// semicolon, else comma, else runs of whitespace (see the module documentation).
     #[default]
     Auto,
     /// `,` (quoted fields allowed).
     Comma,
     /// A tab character (quoted fields allowed).
     Tab,
-    /// `;` (quoted fields allowed; decimal commas are not supported).
+    /// `;` (quoted fields allowed; decimal commas `1,5` read as `1.5`).
     Semicolon,
     /// One or more spaces or tabs; leading and trailing whitespace is ignored, no quoting.
     Whitespace,
 }
 
 impl Delimiter {
-    /// The delimiter `Auto` chooses for a file whose first content line is `line`.
-    fn detect(line: &str) -> Delimiter {
-        if line.contains('\t') {
-            Delimiter::Tab
-        } else if line.contains(',') {
-            Delimiter::Comma
-        } else if line.contains(';') {
-            Delimiter::Semicolon
-        } else {
-            Delimiter::Whitespace
-        }
-    }
-
     /// The single byte the `csv` crate splits on, `None` for whitespace (and auto).
     fn byte(self) -> Option<u8> {
         match self {
@@ -543,6 +545,10 @@ fn detect_format(path: &Path, bytes: &[u8]) -> Format {
     let is_mat = path
         .extension()
         .is_some_and(|ext| ext.eq_ignore_ascii_case("mat"));
+    // UTF-16 text (Excel's "Unicode text", PowerShell) is text although half its bytes are 0.
+    if text::utf16_order(bytes).is_some() {
+        return Format::Text;
+    }
     // Text has no NUL bytes; binary formats (MATLAB v4 headers among them) almost always do.
     let head = &bytes[..bytes.len().min(8192)];
     let binary = head.contains(&0);

@@ -18,7 +18,7 @@ use super::{DataError, Delimiter, check_finite};
 /// # let dir = tempfile::tempdir()?;
 /// let path = dir.path().join("response.csv");
 /// let time = [0.0, 0.005, 0.01];
-/// let position = [0.1, -2.5e-7, 1e300];
+/// let position = [0.1, -2.5e-7, 1e15];
 /// write_csv(&path, &["time_s", "position_um"], &[&time, &position])?;
 /// let read = read_columns(&path, &[Column::Name("position_um".into())], &ReadOptions::default())?;
 /// assert_eq!(read.values[0], position); // exactly, bit for bit
