@@ -16,6 +16,7 @@ mod error;
 mod files;
 #[allow(dead_code)]
 mod progress;
+mod time_unit;
 
 use std::process::ExitCode;
 

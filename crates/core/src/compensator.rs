@@ -183,7 +183,9 @@ impl<T: Real> OutputGuard<T> {
     ) -> T {
         let out = self.limits.clamp_or(value, self.previous);
         let rounding = T::epsilon() * T::from_f64(64.0) * value.abs().max(T::one());
-        if limited || value.is_nan() || (out - value).abs() > rounding {
+        // An infinite value (an overflowed solve) is clamped too; its rounding is infinite, so
+        // it is counted here rather than by the comparison.
+        if limited || !value.is_finite() || (out - value).abs() > rounding {
             if reachable() {
                 self.diagnostics.loop_saturated += 1;
             } else {

@@ -226,6 +226,22 @@ pub fn validate_models(
 
     // (a) Forward prediction.
     let predicted = plant.predict(test.voltage)?;
+    // A prediction or an error that overflows would make the RMS inf: refused, naming the
+    // sample (the values read are bounded, but arrays from the bindings need not be).
+    if let Some(k) = span.clone().find(|&k| {
+        let e = predicted[k] - test.displacement[k];
+        !(e * e).is_finite()
+    }) {
+        return Err(IdentifyError::Data(
+            hystcomp_io::data::DataError::NotFinite {
+                path: None,
+                line: None,
+                row: k + 1,
+                column: "the forward prediction error on the test record".to_owned(),
+                value: predicted[k] - test.displacement[k],
+            },
+        ));
+    }
     let forward = ErrorStats::new(
         &predicted[span.clone()],
         &test.displacement[span.clone()],

@@ -61,6 +61,14 @@ pub enum IndexError {
     },
     /// `max y_d - min y_d` is zero, so no percentage can be formed.
     ConstantDesired,
+    /// An intermediate result (a difference, a square, a sum, the range) overflows to
+    /// infinity: the values are finite but too large for the indices.
+    Overflow {
+        /// What overflowed, e.g. `y - y_d`.
+        what: &'static str,
+        /// The sample where it did (0-based), when one sample decides it.
+        index: Option<usize>,
+    },
     /// Fewer than one bin asked for.
     NoBins,
     /// More bins than the samples support ([`max_mhe_bins`]).
@@ -92,6 +100,16 @@ impl fmt::Display for IndexError {
                 "the desired trajectory is constant, so its range is zero and the indices \
                  (percent of the desired range) are undefined"
             ),
+            IndexError::Overflow { what, index } => {
+                write!(f, "{what} overflows")?;
+                if let Some(index) = index {
+                    write!(f, " at sample {index} (0-based)")?;
+                }
+                f.write_str(
+                    ": the values are too large for the indices; give the records in a unit \
+                     that keeps them within 1e15",
+                )
+            }
             IndexError::NoBins => write!(f, "e_mhe needs at least one bin"),
             IndexError::TooManyBins { bins, samples } => write!(
                 f,
@@ -154,12 +172,32 @@ fn desired_range(desired: &[f64], measured: &[f64]) -> Result<(f64, f64), IndexE
     if hi - lo <= 0.0 {
         return Err(IndexError::ConstantDesired);
     }
+    if !(hi - lo).is_finite() {
+        return Err(IndexError::Overflow {
+            what: "the desired range max y_d - min y_d",
+            index: None,
+        });
+    }
     Ok((lo, hi))
+}
+
+/// The first sample whose `y - y_d` (or its square, with `squared`) overflows.
+fn first_overflow(desired: &[f64], measured: &[f64], squared: bool) -> Option<usize> {
+    desired.iter().zip(measured).position(|(d, y)| {
+        let e = y - d;
+        !(if squared { e * e } else { e }).is_finite()
+    })
 }
 
 /// (D1), corrected (ERRATA item 2): `max |y - y_d| / (max y_d - min y_d) * 100 %`.
 pub fn e_m_percent(desired: &[f64], measured: &[f64]) -> Result<f64, IndexError> {
     let (lo, hi) = desired_range(desired, measured)?;
+    if let Some(index) = first_overflow(desired, measured, false) {
+        return Err(IndexError::Overflow {
+            what: "the error y - y_d",
+            index: Some(index),
+        });
+    }
     let max = desired
         .iter()
         .zip(measured)
@@ -172,11 +210,23 @@ pub fn e_m_percent(desired: &[f64], measured: &[f64]) -> Result<f64, IndexError>
 /// time integral is the sample mean).
 pub fn e_rms_percent(desired: &[f64], measured: &[f64]) -> Result<f64, IndexError> {
     let (lo, hi) = desired_range(desired, measured)?;
+    if let Some(index) = first_overflow(desired, measured, true) {
+        return Err(IndexError::Overflow {
+            what: "the squared error (y - y_d)^2",
+            index: Some(index),
+        });
+    }
     let sum: f64 = desired
         .iter()
         .zip(measured)
         .map(|(d, y)| (y - d) * (y - d))
         .sum();
+    if !sum.is_finite() {
+        return Err(IndexError::Overflow {
+            what: "the sum of squared errors",
+            index: None,
+        });
+    }
     Ok((sum / desired.len() as f64).sqrt() / (hi - lo) * 100.0)
 }
 
@@ -200,12 +250,58 @@ pub fn e_mhe_percent(desired: &[f64], measured: &[f64], bins: usize) -> Result<f
         .filter(|&b| count[b] >= 2)
         .map(|b| high[b] - low[b])
         .fold(0.0, f64::max);
+    if !widest.is_finite() {
+        return Err(IndexError::Overflow {
+            what: "the width max y - min y of a y_d bin",
+            index: None,
+        });
+    }
     Ok(widest / (hi - lo) * 100.0)
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Finite records whose differences, squares or range overflow give an error naming the
+    /// sample, never inf or a silent 0 % (issue 13: one 1e308 sample gave e_mhe = 0 %).
+    #[test]
+    fn overflowing_intermediate_results_are_errors() {
+        let d = ramp(100);
+        let mut y = d.clone();
+        y[37] = 1e308;
+        let mut below = d.clone();
+        below[37] = -1e308;
+        for (measured, index) in [(&y, Some(37)), (&below, Some(37))] {
+            let mut far = measured.clone();
+            far[38] = -measured[37]; // the same y_d bin: its width overflows
+            let e = e_rms_percent(&d, measured).unwrap_err();
+            assert_eq!(
+                e,
+                IndexError::Overflow {
+                    what: "the squared error (y - y_d)^2",
+                    index
+                }
+            );
+            assert!(e.to_string().contains("sample 37"), "{e}");
+            assert!(matches!(
+                e_mhe_percent(&d, &far, 10),
+                Err(IndexError::Overflow { .. })
+            ));
+            assert!(matches!(
+                TrackingIndices::compute(&d, measured, 10),
+                Err(IndexError::Overflow { .. })
+            ));
+        }
+        let huge = [-1e308, 1e308];
+        assert!(matches!(
+            e_m_percent(&huge, &[0.0, 0.0]),
+            Err(IndexError::Overflow { index: None, .. })
+        ));
+        // Large but representable values are fine.
+        let big: Vec<f64> = d.iter().map(|v| v * 1e14).collect();
+        assert!(TrackingIndices::compute(&big, &big, 10).is_ok());
+    }
 
     fn ramp(n: usize) -> Vec<f64> {
         (0..n).map(|i| i as f64 / (n - 1) as f64 * 10.0).collect()

@@ -151,6 +151,18 @@ pub fn run(args: &Args, ctx: Context) -> Result<(), CliError> {
     for (k, (&d, v)) in desired.iter().zip(control.iter_mut()).enumerate() {
         *v = compensator.step(d);
         let after = compensator.diagnostics();
+        if after.non_finite > before.non_finite {
+            // The drive held its previous value: never written as if it were a result.
+            return Err(CliError::input(format!(
+                "{}, row {}: the desired position {d} {} is not finite once normalised by the \
+                 model ({}); the drive would hold its previous value there. Check the \
+                 trajectory's unit against the model's",
+                args.trajectory.display(),
+                columns.file_row(k + 1),
+                compensator.desired_unit(),
+                args.model.display()
+            )));
+        }
         if after.saturated > before.saturated && first_unreachable.is_none() {
             first_unreachable = Some(time[k]);
         }

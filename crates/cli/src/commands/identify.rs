@@ -28,6 +28,9 @@ pub struct ColumnArgs {
     /// Optional time column (s): checked to increase, and used by --warmup-seconds.
     #[arg(long, value_name = "COLUMN")]
     pub time_column: Option<Column>,
+    /// Unit of the time column: s, ms or us.
+    #[arg(long, value_enum, default_value = "s", value_name = "UNIT")]
+    pub time_unit: crate::time_unit::TimeUnit,
     /// Field delimiter of text files: auto, comma, tab, semicolon or whitespace.
     #[arg(long, default_value = "auto")]
     pub delimiter: Delimiter,
@@ -345,7 +348,7 @@ pub fn load(
         data::check_not_constant(&label, values)
             .map_err(|e| CliError::from(e).context(path.display()))?;
     }
-    let time = values.next();
+    let time = values.next().map(|t| columns.time_unit.to_seconds(&t));
     if let Some(time) = &time {
         data::check_time_increasing(time).map_err(|e| {
             let column = if names[2].starts_with("column ") {

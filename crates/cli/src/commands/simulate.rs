@@ -6,6 +6,7 @@ use hystcomp_io::data::{self, Column, DataError, ReadOptions};
 use hystcomp_stage::{Stage, StageConfig, StageResponse};
 
 use crate::files::{Files, NamesFiles};
+use crate::time_unit::TimeUnit;
 use crate::{CliError, Context};
 
 /// Arguments of `hystcomp simulate`.
@@ -34,6 +35,10 @@ pub struct Args {
     /// Command voltage column of the input: a header name or a number counted from 1.
     #[arg(long, value_name = "COLUMN", default_value = "2")]
     pub voltage_column: Column,
+
+    /// Unit of the time column: s, ms or us (the output's time_s is in seconds).
+    #[arg(long, value_enum, default_value = "s", value_name = "UNIT")]
+    pub time_unit: TimeUnit,
 
     /// Seed of the sensor noise (the same seed gives the same output) [default: the stage
     /// file's `seed`, 1 for the built-in stage].
@@ -70,21 +75,38 @@ fn data_error(error: DataError) -> CliError {
     }
 }
 
-/// Refuses an input whose time step is not the stage's sample period.
-fn check_time_step(time: &[f64], config: &StageConfig, stage_name: &str) -> Result<(), CliError> {
+/// Refuses an input whose time step (in seconds, read in `unit`) is not the stage's sample
+/// period; when it is 1000 or 10^6 times off, the message names the `--time-unit` that fits.
+fn check_time_step(
+    time: &[f64],
+    unit: TimeUnit,
+    config: &StageConfig,
+    stage_name: &str,
+) -> Result<(), CliError> {
     let period = 1.0 / config.sample_rate_hz;
     for (i, pair) in time.windows(2).enumerate() {
         let step = pair[1] - pair[0];
         if ((step - period) / period).abs() > STEP_TOLERANCE {
-            return Err(CliError::input(format!(
-                "the input's time step between rows {} and {} is {step} s, but {stage_name} \
-                 samples at sample_rate_hz = {} Hz (a step of {period} s); give a record \
-                 sampled at that rate, or set sample_rate_hz = {} in a stage file",
-                i + 1,
-                i + 2,
-                config.sample_rate_hz,
-                1.0 / step,
-            )));
+            let (first, second) = (i + 1, i + 2);
+            let rate = config.sample_rate_hz;
+            return Err(CliError::input(match unit.likely_instead(step, period) {
+                Some(likely) => format!(
+                    "the input's time step between rows {first} and {second} is {step} s read \
+                     in {}, {} times {stage_name}'s period of {period} s (sample_rate_hz = \
+                     {rate} Hz): the time column is probably in {}; give --time-unit {}",
+                    unit.name(),
+                    step / period,
+                    likely.name(),
+                    likely.name()
+                ),
+                None => format!(
+                    "the input's time step between rows {first} and {second} is {step} s, but \
+                     {stage_name} samples at sample_rate_hz = {rate} Hz (a step of {period} \
+                     s); give a record sampled at that rate, or set sample_rate_hz = {} in a \
+                     stage file (--time-unit ms or us if the time column is not in seconds)",
+                    1.0 / step,
+                ),
+            }));
         }
     }
     Ok(())
@@ -160,12 +182,13 @@ pub fn run(args: &Args, ctx: Context) -> Result<(), CliError> {
         &ReadOptions::default(),
     )
     .map_err(data_error)?;
-    let time = &record.values[0];
+    let time = &args.time_unit.to_seconds(&record.values[0]);
     let command_v = &record.values[1];
     data::check_min_samples(2, time.len(), "a simulation")
         .map_err(|e| data_error(e).context(args.input.display()))?;
     data::check_time_increasing(time).map_err(|e| data_error(e).context(args.input.display()))?;
-    check_time_step(time, &config, &stage_name).map_err(|e| e.context(args.input.display()))?;
+    check_time_step(time, args.time_unit, &config, &stage_name)
+        .map_err(|e| e.context(args.input.display()))?;
 
     let mut stage = Stage::new(&config, args.seed.unwrap_or(config.seed))?;
     let response = stage.run(command_v);

@@ -2,6 +2,8 @@
 //! and plain reference implementations (the oracles the fast paths are checked against).
 #![allow(dead_code)]
 
+pub mod invariants;
+
 use hystcomp_core::{Mpim, OutputLimits, paper};
 use proptest::test_runner::{Config, RngSeed};
 use rand::{Rng, RngExt, SeedableRng};

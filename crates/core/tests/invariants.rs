@@ -1,0 +1,158 @@
+//! The compensators' safety invariants (`common/invariants.rs`) on seeded random models and
+//! on inputs that mix reachable positions with NaN, infinities, +-1e308, `f64::MAX`,
+//! subnormals and zeros, in f64 and f32: the stable counterpart of the fuzz target
+//! `compensators`, so that CI always checks the same properties.
+
+mod common;
+
+use common::invariants::{Subject, check_dihc, check_plant_compensators};
+use common::*;
+use hystcomp_core::{Mpim, OutputLimits};
+use proptest::prelude::*;
+use rand::{Rng, RngExt};
+
+/// Values a desired position may take that no trajectory should: the fuzzers' favourites.
+const EXTREMES: [f64; 14] = [
+    f64::NAN,
+    f64::INFINITY,
+    f64::NEG_INFINITY,
+    1e308,
+    -1e308,
+    f64::MAX,
+    f64::MIN,
+    5e-324,
+    -5e-324,
+    2.2e-308,
+    0.0,
+    -0.0,
+    1e30,
+    -1e30,
+];
+
+/// `len` desired positions: mostly reachable (the plant's output on a random input), with
+/// extremes and values just beyond the reachable range mixed in.
+fn desired(rng: &mut impl Rng, plant: &VecMpim, len: usize) -> Vec<f64> {
+    let v = random_input(rng, len, -0.2, 1.2);
+    let mut p = plant.clone();
+    v.iter()
+        .map(|&x| {
+            let y = p.step(x);
+            match rng.random::<u32>() % 10 {
+                0 => EXTREMES[rng.random::<u32>() as usize % EXTREMES.len()],
+                1 => y * 1.5 + 0.3,
+                _ => y,
+            }
+        })
+        .collect()
+}
+
+fn limits_from(rng: &mut impl Rng) -> OutputLimits<f64> {
+    match rng.random::<u32>() % 3 {
+        0 => OutputLimits::new(0.0, 1.0).unwrap(),
+        1 => OutputLimits::new(0.1, 0.8).unwrap(),
+        _ => OutputLimits::new(-0.5, 1.5).unwrap(),
+    }
+}
+
+fn as_f32(model: &VecMpim) -> Mpim<f32, Vec<f32>> {
+    let f = |v: &[f64]| v.iter().map(|&x| x as f32).collect::<Vec<f32>>();
+    Mpim::new(
+        &f(model.thresholds()),
+        &f(model.weights()),
+        model.a1() as f32,
+        model.a2() as f32,
+    )
+    .unwrap()
+}
+
+fn limits_f32(limits: OutputLimits<f64>) -> OutputLimits<f32> {
+    OutputLimits::new(limits.min() as f32, limits.max() as f32).unwrap()
+}
+
+proptest! {
+    #![proptest_config(seeded(96, 0x696e_7661_7269_616e))]
+
+    /// IHC and WIHC, exact and delayed, in f64 and f32.
+    #[test]
+    fn plant_compensators_keep_their_invariants(seed in any::<u64>(), n in 1usize..20) {
+        let mut rng = rng(seed);
+        let plant = random_invertible_model(&mut rng, n);
+        let limits = limits_from(&mut rng);
+        let desired = desired(&mut rng, &plant, 400);
+        let subject = Subject { model: plant.clone(), limits };
+        if let Err(violation) = check_plant_compensators(&subject, &desired) {
+            prop_assert!(false, "{}", violation);
+        }
+        let subject32 = Subject { model: as_f32(&plant), limits: limits_f32(limits) };
+        let desired32: Vec<f32> = desired.iter().map(|&y| y as f32).collect();
+        if let Err(violation) = check_plant_compensators(&subject32, &desired32) {
+            prop_assert!(false, "f32: {}", violation);
+        }
+    }
+
+    /// DIHC on random inverse models, in f64 and f32.
+    #[test]
+    fn dihc_keeps_its_invariants(seed in any::<u64>(), n in 1usize..20) {
+        let mut rng = rng(seed);
+        let inverse = random_invertible_model(&mut rng, n);
+        let limits = limits_from(&mut rng);
+        let desired = desired(&mut rng, &inverse, 400);
+        let subject = Subject { model: inverse.clone(), limits };
+        if let Err(violation) = check_dihc(&subject, 0.0, 1.0, &desired) {
+            prop_assert!(false, "{}", violation);
+        }
+        let subject32 = Subject { model: as_f32(&inverse), limits: limits_f32(limits) };
+        let desired32: Vec<f32> = desired.iter().map(|&y| y as f32).collect();
+        if let Err(violation) = check_dihc(&subject32, 0.0, 1.0, &desired32) {
+            prop_assert!(false, "f32: {}", violation);
+        }
+    }
+}
+
+/// Issue 13 item 7: the delayed WIHC fed 1e308 clamps its (overflowing) output and counts it.
+#[test]
+fn an_overflowing_delayed_wihc_sample_is_counted() {
+    use hystcomp_core::{Compensator, SolveMode, Wihc};
+    let mut wihc: Wihc<f64, Vec<f64>> =
+        Wihc::new(&table1(), unit_limits(), SolveMode::Delayed).unwrap();
+    for (k, y_d) in [0.3, 1e308, 0.3, -1e308, f64::MAX].into_iter().enumerate() {
+        let before = wihc.diagnostics();
+        let v = wihc.step(y_d);
+        let after = wihc.diagnostics();
+        assert!((0.0..=1.0).contains(&v), "sample {k}: {v}");
+        if y_d.abs() > 1e300 {
+            assert_eq!(
+                after.saturated + after.loop_saturated,
+                before.saturated + before.loop_saturated + 1,
+                "sample {k}: y_d = {y_d} clamped but not counted"
+            );
+        }
+    }
+}
+
+/// Issue 13 item 7: models whose parameters are tiny or subnormal (a model file with a denormal
+/// output scale comes to this) keep every invariant: each clamp counted, outputs within the
+/// limits.
+#[test]
+fn tiny_and_subnormal_models_keep_their_invariants() {
+    let mut rng = rng(5);
+    for factor in [1e-100, 1e-300, 1e-310, 1e-320] {
+        let t = table1();
+        let scaled = |v: &[f64]| v.iter().map(|x| x * factor).collect::<Vec<f64>>();
+        let Ok(plant) = Mpim::new(
+            t.thresholds(),
+            &scaled(t.weights()),
+            t.a1() * factor,
+            t.a2() * factor,
+        ) else {
+            continue;
+        };
+        let desired = desired(&mut rng, &plant, 300);
+        let subject = Subject {
+            model: plant,
+            limits: unit_limits(),
+        };
+        check_plant_compensators(&subject, &desired)
+            .unwrap_or_else(|v| panic!("factor {factor:e}: {v}"));
+    }
+}
