@@ -222,7 +222,7 @@ pub fn identify_chain(
     let plant = plant_chain(voltage, displacement, &plant_options, chain)?;
     let (model, report) = match options.direction {
         Direction::Plant => (plant.model, plant.report),
-        Direction::Inverse => inverse_chain(voltage, displacement, options, chain, plant)?,
+        Direction::Inverse => inverse_chain(voltage, displacement, options, chain, &plant)?,
     };
     let report = ChainReport {
         elapsed_s: started.elapsed().as_secs_f64(),
@@ -243,6 +243,37 @@ fn fitted_end(chain: &ChainOptions, len: usize) -> usize {
     }
 }
 
+/// The inverse (DIHC) chain for a plant chain identified on the same record with the same
+/// `chain` options (saves identifying the plant again): the plant's creep and vibration
+/// links, and an MPIM from the creep-free displacement to the voltage fitted with `options`
+/// (direction inverse).
+pub fn identify_inverse_chain(
+    voltage: &[f64],
+    displacement: &[f64],
+    options: &IdentifyOptions,
+    chain: &ChainOptions,
+    plant: &ChainIdentification,
+) -> Result<ChainIdentification, IdentifyError> {
+    let started = Instant::now();
+    chain.validate()?;
+    hystcomp_io::data::check_same_length(&[("voltage", voltage), ("displacement", displacement)])?;
+    let options = IdentifyOptions {
+        direction: Direction::Inverse,
+        ..options.clone()
+    };
+    let plant = Plant {
+        model: plant.model.clone(),
+        report: plant.report.clone(),
+    };
+    let (mut model, report) = inverse_chain(voltage, displacement, &options, chain, &plant)?;
+    let report = ChainReport {
+        elapsed_s: started.elapsed().as_secs_f64(),
+        ..report
+    };
+    model.identification = serde_json::to_value(&report).ok();
+    Ok(ChainIdentification { model, report })
+}
+
 /// Every `k`-th sample.
 fn decimate(values: &[f64], k: usize) -> Vec<f64> {
     values.iter().step_by(k).copied().collect()
@@ -258,7 +289,6 @@ fn full_rate_span(report: &FitReport, decimation: usize, len: usize) -> std::ops
 struct Plant {
     model: ModelFile,
     report: ChainReport,
-    hysteresis_only: ModelFile,
 }
 
 fn plant_chain(
@@ -346,7 +376,6 @@ fn plant_chain(
             fit,
             elapsed_s: 0.0,
         },
-        hysteresis_only: base.model,
     })
 }
 
@@ -474,7 +503,7 @@ fn inverse_chain(
     displacement: &[f64],
     options: &IdentifyOptions,
     chain: &ChainOptions,
-    plant: Plant,
+    plant: &Plant,
 ) -> Result<(ModelFile, ChainReport), IdentifyError> {
     let k = chain.decimation;
     let rate = chain.sample_rate_hz;
@@ -534,13 +563,12 @@ fn inverse_chain(
                 reason: "no fitted samples".to_owned(),
             }
         })?;
-    let _ = plant.hysteresis_only;
     Ok((
         model,
         ChainReport {
             hysteresis: inverse.report,
-            creep: plant.report.creep,
-            dynamics: plant.report.dynamics,
+            creep: plant.report.creep.clone(),
+            dynamics: plant.report.dynamics.clone(),
             contributions,
             fit,
             elapsed_s: 0.0,

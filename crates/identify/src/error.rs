@@ -71,6 +71,8 @@ pub enum IdentifyError {
     Core(CoreError),
     /// The model file could not be built.
     ModelFile(ModelFileError),
+    /// The chain's vibration link could not be identified (the reason says why).
+    Dynamics(String),
 }
 
 impl fmt::Display for IdentifyError {
@@ -134,6 +136,9 @@ impl fmt::Display for IdentifyError {
             ),
             IdentifyError::Core(e) => write!(f, "the identified model is refused: {e}"),
             IdentifyError::ModelFile(e) => e.fmt(f),
+            IdentifyError::Dynamics(reason) => {
+                write!(f, "the vibration link could not be identified: {reason}")
+            }
         }
     }
 }

@@ -80,7 +80,7 @@ mod solver;
 
 pub use chain::{
     ChainIdentification, ChainOptions, ChainReport, Contribution, CreepFit, CreepOptions,
-    identify_chain,
+    identify_chain, identify_inverse_chain,
 };
 pub use crossval::{
     CrossValidation, CrossvalOptions, CrossvalReport, Record, Replay, Validation, crossval,

@@ -5,6 +5,7 @@
 use hystcomp_core::{ChainModel, Creep, Mpim, Vibration, paper};
 use hystcomp_identify::{
     ChainOptions, CreepOptions, DynamicsOptions, IdentifyOptions, identify_chain,
+    identify_inverse_chain,
 };
 use hystcomp_io::model_file::Direction;
 
@@ -142,8 +143,20 @@ fn the_inverse_chain_replays_the_voltage() {
         direction: Direction::Inverse,
         ..IdentifyOptions::default()
     };
-    let fit = identify_chain(&volts, &um, &options_inverse, &options(segment)).unwrap();
+    let fit = identify_chain(&volts, &um, &options_inverse, &options(segment.clone())).unwrap();
     assert_eq!(fit.model.direction, Direction::Inverse);
+    // The same from a plant chain identified before.
+    let plant = identify_chain(
+        &volts,
+        &um,
+        &IdentifyOptions::default(),
+        &options(segment.clone()),
+    )
+    .unwrap();
+    let again =
+        identify_inverse_chain(&volts, &um, &options_inverse, &options(segment), &plant).unwrap();
+    assert_eq!(again.model.weights, fit.model.weights);
+    assert_eq!(again.model.creep, fit.model.creep);
     // The inverse of an MPIM is not an MPIM: about 0.5 % of the voltage range remains of
     // Table 1's inverse; creep is the rest of the hysteresis-only inverse's error.
     let rms: Vec<f64> = fit
