@@ -184,10 +184,10 @@ fn bad_values_are_refused_naming_the_option() {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("x.csv");
     let o = s(&out);
-    assert_fails(&["signal", "paper", "--speed", "0", "-o", o], &["speed"]);
+    assert_fails(&["signal", "paper", "--speed", "0", "-o", o], &["--speed"]);
     assert_fails(
         &["signal", "paper", "--sample-rate", "1e9", "-o", o],
-        &["sample_rate"],
+        &["--sample-rate"],
     );
     assert_fails(
         &["signal", "paper", "--duration", "1e9", "-o", o],
@@ -203,8 +203,13 @@ fn bad_values_are_refused_naming_the_option() {
     );
     assert_fails(
         &["signal", "triangle", "--rounding", "0.9", "-o", o],
-        &["rounding"],
+        &["--rounding"],
     );
+    assert_fails(
+        &["signal", "sawtooth", "--rise-fraction", "1", "-o", o],
+        &["--rise-fraction"],
+    );
+    assert_fails(&["signal", "steps", "--hold", "0", "-o", o], &["--hold"]);
     assert!(!out.exists(), "nothing written on a refusal");
     let usage = hystcomp(&["signal", "nonsense", "-o", o]);
     assert_eq!(usage.status.code(), Some(2));

@@ -182,7 +182,9 @@ pub fn run(args: &Args, ctx: Context) -> Result<(), CliError> {
 
 /// The value column's name and the samples.
 fn values(args: &Args) -> Result<(String, Vec<f64>), CliError> {
-    let bad = |e: hystcomp_experiments::signals::SignalError| CliError::input(e.to_string());
+    let bad = |e: hystcomp_experiments::signals::SignalError| {
+        CliError::input(format!("{}: {}", option_of(e.parameter), e.message))
+    };
     if args.kind == Kind::Identification {
         return identification(args);
     }
@@ -273,6 +275,20 @@ fn identification(args: &Args) -> Result<(String, Vec<f64>), CliError> {
         .collect();
     let column = args.column.clone().unwrap_or_else(|| "command_v".into());
     Ok((column, values))
+}
+
+/// The option that sets a signal parameter (the generators name their fields).
+fn option_of(parameter: &str) -> String {
+    match parameter {
+        "duration_s" => "--duration".into(),
+        "sample_rate_hz" => "--sample-rate".into(),
+        "frequency_hz" | "fundamental_hz" => "--frequency".into(),
+        "hold_s" => "--hold".into(),
+        "transition_s" => "--transition".into(),
+        "start_hz" => "--start-frequency".into(),
+        "end_hz" => "--end-frequency".into(),
+        other => format!("--{}", other.replace('_', "-")),
+    }
 }
 
 /// The length of the default excitation at speed 1, s.
