@@ -32,11 +32,10 @@
 #define HYSTCOMP_MAX_ITERATIONS 100000
 
 /**
- * The largest regressor matrix `hystcomp_identify` builds, in doubles: samples times
- * (operators + 4) must not exceed it (2^27 doubles, 1 GiB), e.g. 10 million samples with 10
- * operators, or 1 million with 130.
+ * The most values the operators' outputs over a record may take in `hystcomp_identify`:
+ * samples times operators (5e7, 400 MB of doubles).
  */
-#define HYSTCOMP_MAX_REGRESSOR_ELEMENTS (1 << 27)
+#define HYSTCOMP_MAX_REGRESSOR_VALUES 50000000
 
 /**
  * The default number of e_mhe bins across the desired range (100; at least 10 samples per bin
@@ -253,7 +252,8 @@ typedef struct HystcompIdentifyOptions {
     int solver;
     /**
      * Play operators `n` at thresholds `(i - 1)/n` of the input range (eq. (11)); default 10,
-     * at most `HYSTCOMP_MAX_OPERATORS`. Ignored when `thresholds` is given.
+     * at most `HYSTCOMP_MAX_OPERATORS`, and samples times operators at most
+     * `HYSTCOMP_MAX_REGRESSOR_VALUES`. Ignored when `thresholds` is given.
      */
     size_t operators;
     /**
@@ -472,7 +472,9 @@ typedef struct HystcompScale {
  * A model as values: everything a model file holds (see `crates/io/src/model_file.rs`).
  *
  * The MPIM of eq. (4) in normalised units, `y = a1 x^3 + a2 x + sum b_i F_{r_i}[x]`, plus the
- * physical scales of its input and output and the direction it maps.
+ * physical scales of its input and output and the direction it maps, and optionally the creep
+ * and vibration links (format version 2; a model without them has `sample_rate_hz` 0,
+ * `creep_elements` 0 and `vibration_numerator_len` 0).
  *
  * Filled in by `hystcomp_model_values` (every pointer then points into the model and stays
  * valid until it is freed), read by `hystcomp_model_from_values` (every pointer read during the
@@ -530,6 +532,47 @@ typedef struct HystcompModelValues {
      * read as NULL.
      */
     const char *identification_json;
+    /**
+     * The rate the creep and vibration links run at, Hz (> 0 with either link); 0 without
+     * links.
+     */
+    double sample_rate_hz;
+    /**
+     * The creep link's elements (at most 64); 0: no creep link.
+     */
+    size_t creep_elements;
+    /**
+     * The relaxed displacement (at rest), in the displacement unit.
+     */
+    double creep_origin;
+    /**
+     * `creep_elements` time constants `tau_i`, s, positive.
+     */
+    const double *creep_time_constants_s;
+    /**
+     * `creep_elements` dimensionless weights `c_i`, `sum |c_i| < 1`.
+     */
+    const double *creep_weights;
+    /**
+     * The vibration link's pure delay `d`, samples.
+     */
+    size_t vibration_delay_samples;
+    /**
+     * The length of `vibration_numerator` (at most 17); 0: no vibration link.
+     */
+    size_t vibration_numerator_len;
+    /**
+     * `b_0 .. b_m`.
+     */
+    const double *vibration_numerator;
+    /**
+     * The length of `vibration_denominator` (at most 17).
+     */
+    size_t vibration_denominator_len;
+    /**
+     * `1, a_1 .. a_n` (unit static gain with the numerator).
+     */
+    const double *vibration_denominator;
 } HystcompModelValues;
 
 #ifdef __cplusplus
@@ -559,8 +602,10 @@ int hystcomp_compensator_from_model(const struct HystcompModel *m,
 
 /**
  * One-shot compensation: the drive `v[k]` for every desired position `y_d[k]` of a whole
- * trajectory, from the initial state (zero operator memory, eq. (1)), as a compensator made by
- * `hystcomp_compensator_from_model` and run by `hystcomp_compensator_process` would give.
+ * known trajectory, from the initial state (zero operator memory, eq. (1)), as a compensator
+ * made by `hystcomp_compensator_from_model` and run by `hystcomp_compensator_process` would
+ * give; for a model with a vibration link the drive is aligned with the trajectory (`v[k]` for
+ * `y_d[k]`: the preview's lag removed, the trajectory held at its last value after its end).
  * `y_d` and `v` may be the same array (in place). Every `v[k]` lies within the limits and is
  * never NaN.
  *
@@ -588,6 +633,19 @@ int hystcomp_compensate(const struct HystcompModel *m,
                         double *v,
                         size_t v_len,
                         struct HystcompDiagnostics *diagnostics);
+
+/**
+ * Writes the vibration inverse's preview, in samples, to `*samples`: 0 for a model without a
+ * vibration link. Streaming (`hystcomp_compensator_step`, `hystcomp_compensator_process`),
+ * the drive returned lags the desired position fed by this many samples;
+ * `hystcomp_compensate` removes the lag for a whole known trajectory.
+ *
+ * Fails with `NULL_POINTER`.
+ *
+ * # Safety
+ * `h` must be a live handle or NULL; `samples` valid for one write or NULL.
+ */
+int hystcomp_compensator_preview(const struct HystcompCompensator *h, size_t *samples);
 
 /**
  * Creates a compensator from a model file, in the file's physical units: desired position in
@@ -906,16 +964,38 @@ int hystcomp_model_from_values(const struct HystcompModelValues *values,
 int hystcomp_model_values(const struct HystcompModel *m, struct HystcompModelValues *values);
 
 /**
- * Creates the forward model of a model in memory, in its physical units (as
+ * Creates the forward MPIM of a model in memory, in its physical units (as
  * `hystcomp_mpim_from_model_file` does for a file): for a plant model, drive voltage in and
  * displacement out. The memory starts at zero (eq. (1)); the model handle may be freed after.
+ * A model with creep or vibration links is refused: this handle runs the hysteresis alone,
+ * `hystcomp_model_predict` runs the whole chain.
  *
- * Fails with `NULL_POINTER`.
+ * Fails with `NULL_POINTER` or `INVALID_ARGUMENT` (a model with links).
  *
  * # Safety
  * `m` must be a live model handle or NULL; `out` valid for one write or NULL.
  */
 int hystcomp_mpim_from_model(const struct HystcompModel *m, struct HystcompMpim **out);
+
+/**
+ * Runs the model forward over a record, from rest (zero operator memory, eq. (1)), in its
+ * physical units: `y[k]` for `x[k]`. A plant model maps drive voltage to displacement through
+ * the whole chain (hysteresis, then creep and vibration when the model has them); an inverse
+ * model maps desired displacement to voltage (the vibration inverse non-causally over the
+ * whole record). `x` and `y` may be the same array.
+ *
+ * Fails with `NULL_POINTER` or `INVALID_ARGUMENT` (lengths differ or 0, a NaN or infinite
+ * input: nothing is written then).
+ *
+ * # Safety
+ * `m` must be a live model handle or NULL; `x` must point to `x_len` readable doubles and `y`
+ * to `y_len` writable doubles (or be NULL).
+ */
+int hystcomp_model_predict(const struct HystcompModel *m,
+                           const double *x,
+                           size_t x_len,
+                           double *y,
+                           size_t y_len);
 
 /**
  * Releases a model. NULL is accepted (and ignored); a handle must not be used after, nor freed

@@ -5,7 +5,7 @@ use std::ffi::{c_char, c_int};
 use hystcomp_io::compensator::{Method, ScaledCompensator};
 
 use crate::HystcompCompensator;
-use crate::args::{check_array, clear_out, non_finite_failure, put_handle, run_signal, str_arg};
+use crate::args::{check_array, clear_out, non_finite_failure, put_handle, str_arg, write_out};
 use crate::boundary::{Failure, boundary};
 use crate::model::{HystcompModel, model_arg};
 
@@ -80,8 +80,10 @@ pub unsafe extern "C" fn hystcomp_compensator_from_model(
 }
 
 /// One-shot compensation: the drive `v[k]` for every desired position `y_d[k]` of a whole
-/// trajectory, from the initial state (zero operator memory, eq. (1)), as a compensator made by
-/// `hystcomp_compensator_from_model` and run by `hystcomp_compensator_process` would give.
+/// known trajectory, from the initial state (zero operator memory, eq. (1)), as a compensator
+/// made by `hystcomp_compensator_from_model` and run by `hystcomp_compensator_process` would
+/// give; for a model with a vibration link the drive is aligned with the trajectory (`v[k]` for
+/// `y_d[k]`: the preview's lag removed, the trajectory held at its last value after its end).
 /// `y_d` and `v` may be the same array (in place). Every `v[k]` lies within the limits and is
 /// never NaN.
 ///
@@ -135,9 +137,16 @@ pub unsafe extern "C" fn hystcomp_compensate(
         check_array(v, v_len, "v")?;
         // SAFETY: NUL-terminated or NULL (the caller's contract).
         let mut compensator = unsafe { build(model, method, v_min, v_max, use_limits) }?;
-        // SAFETY: `y_d_len` readable and writable doubles (the caller's contract), checked for
-        // NULL and alignment; `run_signal` reads each sample before writing it.
-        let (count, first) = unsafe { run_signal(y_d, v, y_d_len, |x| compensator.step(x)) }?;
+        // SAFETY: `y_d_len` readable doubles (the caller's contract), non-NULL and aligned
+        // (checked); copied before `v` is written, so the two may be the same array.
+        let desired = unsafe { std::slice::from_raw_parts(y_d, y_d_len) }.to_vec();
+        let count = desired.iter().filter(|x| !x.is_finite()).count();
+        let first = desired.iter().position(|x| !x.is_finite()).unwrap_or(0);
+        let mut drive = vec![0.0; y_d_len];
+        compensator.process(&desired, &mut drive)?;
+        // SAFETY: `v` is valid for `v_len == drive.len()` writes (the caller's contract),
+        // non-NULL and aligned (checked); `desired` is a copy.
+        unsafe { std::ptr::copy_nonoverlapping(drive.as_ptr(), v, drive.len()) };
         if !diagnostics.is_null() {
             let d = compensator.diagnostics();
             let (lo, hi) = compensator.limits();
@@ -157,5 +166,27 @@ pub unsafe extern "C" fn hystcomp_compensate(
         } else {
             Err(non_finite_failure(count, first, "desired position"))
         }
+    })
+}
+
+/// Writes the vibration inverse's preview, in samples, to `*samples`: 0 for a model without a
+/// vibration link. Streaming (`hystcomp_compensator_step`, `hystcomp_compensator_process`),
+/// the drive returned lags the desired position fed by this many samples;
+/// `hystcomp_compensate` removes the lag for a whole known trajectory.
+///
+/// Fails with `NULL_POINTER`.
+///
+/// # Safety
+/// `h` must be a live handle or NULL; `samples` valid for one write or NULL.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn hystcomp_compensator_preview(
+    h: *const HystcompCompensator,
+    samples: *mut usize,
+) -> c_int {
+    boundary(|| {
+        // SAFETY: a live handle or NULL (the caller's contract); only read.
+        let c = unsafe { h.as_ref() }.ok_or_else(|| Failure::null("compensator handle"))?;
+        // SAFETY: valid for a write or NULL (checked by write_out).
+        unsafe { write_out(samples, c.inner.preview(), "samples") }
     })
 }

@@ -12,19 +12,25 @@ use crate::args::{clear_out, doubles, put_handle, signal, str_arg};
 use crate::boundary::{Failure, boundary};
 use crate::model::{HystcompDirection, HystcompModel, direction_arg};
 
+// The library's bounds (`hystcomp_identify`), checked there before anything is allocated;
+// repeated here as literals for the header (cbindgen), and held equal by the assertions.
+
 /// The most play operators `hystcomp_identify` accepts (`operators`, or `threshold_count`).
 pub const HYSTCOMP_MAX_OPERATORS: usize = 1000;
+const _: () = assert!(HYSTCOMP_MAX_OPERATORS == hystcomp_identify::MAX_OPERATORS);
 
 /// The most particles of the swarm `hystcomp_identify` accepts.
 pub const HYSTCOMP_MAX_PARTICLES: usize = 1000;
+const _: () = assert!(HYSTCOMP_MAX_PARTICLES == hystcomp_identify::MAX_PARTICLES);
 
 /// The most iterations of the swarm `hystcomp_identify` accepts.
 pub const HYSTCOMP_MAX_ITERATIONS: usize = 100000;
+const _: () = assert!(HYSTCOMP_MAX_ITERATIONS == hystcomp_identify::MAX_ITERATIONS);
 
-/// The largest regressor matrix `hystcomp_identify` builds, in doubles: samples times
-/// (operators + 4) must not exceed it (2^27 doubles, 1 GiB), e.g. 10 million samples with 10
-/// operators, or 1 million with 130.
-pub const HYSTCOMP_MAX_REGRESSOR_ELEMENTS: usize = 1 << 27;
+/// The most values the operators' outputs over a record may take in `hystcomp_identify`:
+/// samples times operators (5e7, 400 MB of doubles).
+pub const HYSTCOMP_MAX_REGRESSOR_VALUES: usize = 50000000;
+const _: () = assert!(HYSTCOMP_MAX_REGRESSOR_VALUES == hystcomp_identify::MAX_REGRESSOR_VALUES);
 
 /// The solver of `hystcomp_identify` (passed as an `int`).
 #[repr(C)]
@@ -60,7 +66,8 @@ pub struct HystcompIdentifyOptions {
     /// A `HystcompSolver` (default least squares).
     pub solver: c_int,
     /// Play operators `n` at thresholds `(i - 1)/n` of the input range (eq. (11)); default 10,
-    /// at most `HYSTCOMP_MAX_OPERATORS`. Ignored when `thresholds` is given.
+    /// at most `HYSTCOMP_MAX_OPERATORS`, and samples times operators at most
+    /// `HYSTCOMP_MAX_REGRESSOR_VALUES`. Ignored when `thresholds` is given.
     pub operators: usize,
     /// `threshold_count` thresholds given explicitly (fractions of the input range in
     /// `[0, 1)`, strictly increasing), or NULL for `operators` uniform ones. Read during the
@@ -271,69 +278,38 @@ pub unsafe extern "C" fn hystcomp_identify_options_default(
     })
 }
 
-/// Checks that `value` lies in `[lo, hi]`, naming the option.
-fn bounded(value: usize, lo: usize, hi: usize, option: &str) -> Result<(), Failure> {
-    if (lo..=hi).contains(&value) {
-        Ok(())
-    } else {
-        Err(Failure::invalid(format!(
-            "{option} {value} is out of range: give {lo} to {hi}"
-        )))
-    }
-}
-
-/// The library's options for `o`, every size bounded before anything is allocated.
+/// The library's options for `o` (the library bounds every size before allocating; the given
+/// thresholds are counted here before they are copied).
 ///
 /// # Safety
 /// The pointers of `o` must be valid as documented on `HystcompIdentifyOptions`.
-unsafe fn library_options(
-    o: &HystcompIdentifyOptions,
-    samples: usize,
-) -> Result<IdentifyOptions, Failure> {
+unsafe fn library_options(o: &HystcompIdentifyOptions) -> Result<IdentifyOptions, Failure> {
     let thresholds = if o.thresholds.is_null() {
         if o.threshold_count != 0 {
             return Err(Failure::null("thresholds (threshold_count is not 0)"));
         }
-        bounded(o.operators, 1, HYSTCOMP_MAX_OPERATORS, "operators")?;
         Thresholds::Uniform(o.operators)
     } else {
-        bounded(
-            o.threshold_count,
-            1,
-            HYSTCOMP_MAX_OPERATORS,
-            "threshold_count",
-        )?;
+        if o.threshold_count > HYSTCOMP_MAX_OPERATORS {
+            return Err(Failure::invalid(format!(
+                "threshold_count {} is more than the {HYSTCOMP_MAX_OPERATORS} play operators \
+                 identification fits",
+                o.threshold_count
+            )));
+        }
         // SAFETY: `threshold_count` doubles (the caller's contract).
-        Thresholds::Given(
-            unsafe { doubles(o.thresholds, o.threshold_count, "thresholds") }?.to_vec(),
-        )
+        let given = unsafe { doubles(o.thresholds, o.threshold_count, "thresholds") }?;
+        Thresholds::Given(given.to_vec())
     };
-    let operators = match &thresholds {
-        Thresholds::Uniform(n) => *n,
-        Thresholds::Given(t) => t.len(),
-    };
-    if samples.saturating_mul(operators + 4) > HYSTCOMP_MAX_REGRESSOR_ELEMENTS {
-        return Err(Failure::invalid(format!(
-            "{samples} samples with {operators} operators need a regressor matrix of \
-             {samples} x {} doubles, more than the {HYSTCOMP_MAX_REGRESSOR_ELEMENTS} \
-             (1 GiB) identification accepts; give fewer samples (decimate the record) or \
-             fewer operators",
-            operators + 4
-        )));
-    }
     let method = match o.solver {
         0 => Method::LeastSquares,
-        1 => {
-            bounded(o.particles, 2, HYSTCOMP_MAX_PARTICLES, "particles")?;
-            bounded(o.iterations, 1, HYSTCOMP_MAX_ITERATIONS, "iterations")?;
-            Method::ParticleSwarm(
-                PsoOptions::default()
-                    .with_particles(o.particles)?
-                    .with_iterations(o.iterations)?
-                    .with_seed(o.seed)
-                    .with_polish(o.polish != 0),
-            )
-        }
+        1 => Method::ParticleSwarm(
+            PsoOptions::default()
+                .with_particles(o.particles)?
+                .with_iterations(o.iterations)?
+                .with_seed(o.seed)
+                .with_polish(o.polish != 0),
+        ),
         other => {
             return Err(Failure::invalid(format!(
                 "solver {other} is not a HystcompSolver (0 = least squares, 1 = particle swarm)"
@@ -438,7 +414,7 @@ pub unsafe extern "C" fn hystcomp_identify(
             .copied()
             .unwrap_or_else(default_options);
         // SAFETY: the struct's pointers are valid as documented (the caller's contract).
-        let options = unsafe { library_options(&given, voltage.len()) }?;
+        let options = unsafe { library_options(&given) }?;
         let identification = hystcomp_identify::identify(voltage, displacement, &options)?;
         if !report.is_null() {
             // SAFETY: non-NULL, valid for a write (the caller's contract).

@@ -1,15 +1,23 @@
 //! Models in memory: a model file (`hystcomp_io::model_file::ModelFile`) as a handle, read
 //! from and written to disk, and taken apart into values (numbers and strings) or built from
 //! them, so that a caller can keep a model in its own data structures (a MATLAB struct, a
-//! firmware's parameter table) and give it back.
+//! firmware's parameter table) and give it back, and run forward over a record.
+//!
+//! A model is the MPIM of eq. (4) and, in format version 2, optionally the creep and vibration
+//! links of the chain `hysteresis -> creep -> vibration` (see `crates/io/src/model_file.rs`).
 
 use std::ffi::{CString, c_char, c_int};
 use std::panic::{AssertUnwindSafe, catch_unwind};
 
-use hystcomp_io::model_file::{Direction, ModelFile, ModelFileError, Scale};
+use hystcomp_core::{MAX_CREEP_ELEMENTS, MAX_VIBRATION_ORDER};
+use hystcomp_io::model_file::{
+    CreepPart, Direction, ModelFile, ModelFileError, Scale, VibrationPart,
+};
 
 use crate::HystcompMpim;
-use crate::args::{clear_out, parameters, path_arg, put_handle, str_arg};
+use crate::args::{
+    check_array, clear_out, doubles, parameters, path_arg, put_handle, signal, str_arg,
+};
 use crate::boundary::{Failure, boundary};
 
 /// What a model maps (passed as an `int`).
@@ -44,7 +52,9 @@ pub struct HystcompScale {
 /// A model as values: everything a model file holds (see `crates/io/src/model_file.rs`).
 ///
 /// The MPIM of eq. (4) in normalised units, `y = a1 x^3 + a2 x + sum b_i F_{r_i}[x]`, plus the
-/// physical scales of its input and output and the direction it maps.
+/// physical scales of its input and output and the direction it maps, and optionally the creep
+/// and vibration links (format version 2; a model without them has `sample_rate_hz` 0,
+/// `creep_elements` 0 and `vibration_numerator_len` 0).
 ///
 /// Filled in by `hystcomp_model_values` (every pointer then points into the model and stays
 /// valid until it is freed), read by `hystcomp_model_from_values` (every pointer read during the
@@ -79,6 +89,27 @@ pub struct HystcompModelValues {
     /// an identified model the fit report of `hystcomp_identify`), or NULL. An empty string is
     /// read as NULL.
     pub identification_json: *const c_char,
+    /// The rate the creep and vibration links run at, Hz (> 0 with either link); 0 without
+    /// links.
+    pub sample_rate_hz: f64,
+    /// The creep link's elements (at most 64); 0: no creep link.
+    pub creep_elements: usize,
+    /// The relaxed displacement (at rest), in the displacement unit.
+    pub creep_origin: f64,
+    /// `creep_elements` time constants `tau_i`, s, positive.
+    pub creep_time_constants_s: *const f64,
+    /// `creep_elements` dimensionless weights `c_i`, `sum |c_i| < 1`.
+    pub creep_weights: *const f64,
+    /// The vibration link's pure delay `d`, samples.
+    pub vibration_delay_samples: usize,
+    /// The length of `vibration_numerator` (at most 17); 0: no vibration link.
+    pub vibration_numerator_len: usize,
+    /// `b_0 .. b_m`.
+    pub vibration_numerator: *const f64,
+    /// The length of `vibration_denominator` (at most 17).
+    pub vibration_denominator_len: usize,
+    /// `1, a_1 .. a_n` (unit static gain with the numerator).
+    pub vibration_denominator: *const f64,
 }
 
 /// A model file in memory (opaque): the MPIM's normalised parameters, the physical scales, the
@@ -278,10 +309,89 @@ pub unsafe extern "C" fn hystcomp_model_from_values(
                 file.identification = Some(value);
             }
         }
+        // SAFETY: the link arrays hold their stated lengths (the caller's contract).
+        unsafe { links_arg(v, &mut file) }?;
         // SAFETY: `out` was checked non-NULL by `clear_out` and is valid for a write.
         unsafe { put_handle(out, HystcompModel::new(file)) };
         Ok(())
     })
+}
+
+/// Reads the creep and vibration links of `v` into `file` and validates it again; their
+/// lengths are bounded before the arrays are read.
+///
+/// # Safety
+/// The link arrays of `v` must hold their stated lengths or be NULL.
+unsafe fn links_arg(v: &HystcompModelValues, file: &mut ModelFile) -> Result<(), Failure> {
+    if v.creep_elements > MAX_CREEP_ELEMENTS {
+        return Err(Failure::invalid(format!(
+            "creep_elements {} is more than the {MAX_CREEP_ELEMENTS} a creep link holds",
+            v.creep_elements
+        )));
+    }
+    for (what, len) in [
+        ("vibration_numerator_len", v.vibration_numerator_len),
+        ("vibration_denominator_len", v.vibration_denominator_len),
+    ] {
+        if len > MAX_VIBRATION_ORDER + 1 {
+            return Err(Failure::invalid(format!(
+                "{what} {len} is more than the {} coefficients of a vibration link of order \
+                 {MAX_VIBRATION_ORDER}",
+                MAX_VIBRATION_ORDER + 1
+            )));
+        }
+    }
+    if v.creep_elements > 0 {
+        // SAFETY: `creep_elements` doubles each (the caller's contract).
+        let (time_constants_s, weights) = unsafe {
+            (
+                doubles(
+                    v.creep_time_constants_s,
+                    v.creep_elements,
+                    "creep_time_constants_s",
+                )?,
+                doubles(v.creep_weights, v.creep_elements, "creep_weights")?,
+            )
+        };
+        file.creep = Some(CreepPart {
+            origin: v.creep_origin,
+            time_constants_s: time_constants_s.to_vec(),
+            weights: weights.to_vec(),
+        });
+    }
+    if v.vibration_numerator_len > 0 {
+        // SAFETY: the stated lengths (the caller's contract).
+        let (numerator, denominator) = unsafe {
+            (
+                doubles(
+                    v.vibration_numerator,
+                    v.vibration_numerator_len,
+                    "vibration_numerator",
+                )?,
+                doubles(
+                    v.vibration_denominator,
+                    v.vibration_denominator_len,
+                    "vibration_denominator",
+                )?,
+            )
+        };
+        file.vibration = Some(VibrationPart {
+            delay_samples: v.vibration_delay_samples,
+            numerator: numerator.to_vec(),
+            denominator: denominator.to_vec(),
+        });
+    }
+    if v.sample_rate_hz != 0.0 {
+        if !(v.sample_rate_hz.is_finite() && v.sample_rate_hz > 0.0) {
+            return Err(Failure::invalid(format!(
+                "sample_rate_hz {} is not a rate: give a positive, finite rate in Hz, or 0 for a \
+                 model without creep and vibration",
+                v.sample_rate_hz
+            )));
+        }
+        file.sample_rate_hz = Some(v.sample_rate_hz);
+    }
+    file.validate().map_err(|e| Failure::invalid(e.to_string()))
 }
 
 /// Fills `*values` with the model's values. Every pointer written (strings, `thresholds`,
@@ -336,6 +446,28 @@ pub unsafe extern "C" fn hystcomp_model_values(
                 .identification
                 .as_ref()
                 .map_or(std::ptr::null(), |s| s.as_ptr()),
+            sample_rate_hz: file.sample_rate_hz.unwrap_or(0.0),
+            creep_elements: file.creep.as_ref().map_or(0, |c| c.weights.len()),
+            creep_origin: file.creep.as_ref().map_or(0.0, |c| c.origin),
+            creep_time_constants_s: file
+                .creep
+                .as_ref()
+                .map_or(std::ptr::null(), |c| c.time_constants_s.as_ptr()),
+            creep_weights: file
+                .creep
+                .as_ref()
+                .map_or(std::ptr::null(), |c| c.weights.as_ptr()),
+            vibration_delay_samples: file.vibration.as_ref().map_or(0, |d| d.delay_samples),
+            vibration_numerator_len: file.vibration.as_ref().map_or(0, |d| d.numerator.len()),
+            vibration_numerator: file
+                .vibration
+                .as_ref()
+                .map_or(std::ptr::null(), |d| d.numerator.as_ptr()),
+            vibration_denominator_len: file.vibration.as_ref().map_or(0, |d| d.denominator.len()),
+            vibration_denominator: file
+                .vibration
+                .as_ref()
+                .map_or(std::ptr::null(), |d| d.denominator.as_ptr()),
         };
         // SAFETY: non-NULL, valid for a write (the caller's contract).
         unsafe { values.write(filled) };
@@ -343,11 +475,13 @@ pub unsafe extern "C" fn hystcomp_model_values(
     })
 }
 
-/// Creates the forward model of a model in memory, in its physical units (as
+/// Creates the forward MPIM of a model in memory, in its physical units (as
 /// `hystcomp_mpim_from_model_file` does for a file): for a plant model, drive voltage in and
 /// displacement out. The memory starts at zero (eq. (1)); the model handle may be freed after.
+/// A model with creep or vibration links is refused: this handle runs the hysteresis alone,
+/// `hystcomp_model_predict` runs the whole chain.
 ///
-/// Fails with `NULL_POINTER`.
+/// Fails with `NULL_POINTER` or `INVALID_ARGUMENT` (a model with links).
 ///
 /// # Safety
 /// `m` must be a live model handle or NULL; `out` valid for one write or NULL.
@@ -362,12 +496,66 @@ pub unsafe extern "C" fn hystcomp_mpim_from_model(
         // SAFETY: a live handle or NULL (the caller's contract).
         let model = unsafe { model_arg(m) }?;
         let file = &model.file;
+        if file.creep.is_some() || file.vibration.is_some() {
+            return Err(Failure::invalid(
+                "the model has creep or vibration links, which a forward MPIM handle would \
+                 leave out; run the whole chain with hystcomp_model_predict",
+            ));
+        }
         let mpim = HystcompMpim {
             model: file.model()?,
             scales: Some((file.input.clone(), file.output.clone())),
         };
         // SAFETY: `out` was checked non-NULL by `clear_out` and is valid for a write.
         unsafe { put_handle(out, mpim) };
+        Ok(())
+    })
+}
+
+/// Runs the model forward over a record, from rest (zero operator memory, eq. (1)), in its
+/// physical units: `y[k]` for `x[k]`. A plant model maps drive voltage to displacement through
+/// the whole chain (hysteresis, then creep and vibration when the model has them); an inverse
+/// model maps desired displacement to voltage (the vibration inverse non-causally over the
+/// whole record). `x` and `y` may be the same array.
+///
+/// Fails with `NULL_POINTER` or `INVALID_ARGUMENT` (lengths differ or 0, a NaN or infinite
+/// input: nothing is written then).
+///
+/// # Safety
+/// `m` must be a live model handle or NULL; `x` must point to `x_len` readable doubles and `y`
+/// to `y_len` writable doubles (or be NULL).
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn hystcomp_model_predict(
+    m: *const HystcompModel,
+    x: *const f64,
+    x_len: usize,
+    y: *mut f64,
+    y_len: usize,
+) -> c_int {
+    boundary(|| {
+        // SAFETY: a live handle or NULL (the caller's contract).
+        let model = unsafe { model_arg(m) }?;
+        if y.is_null() {
+            return Err(Failure::null("y"));
+        }
+        // SAFETY: `x_len` readable doubles or NULL (the caller's contract); copied before `y`
+        // is written, so the two may be the same array.
+        let input = unsafe { signal(x, x_len, "x") }?.to_vec();
+        if y_len != x_len {
+            return Err(Failure::invalid(format!(
+                "x has {x_len} samples but y has room for {y_len}; give arrays of equal length"
+            )));
+        }
+        if let Some(k) = input.iter().position(|v| !v.is_finite()) {
+            return Err(Failure::invalid(format!(
+                "x[{k}] is NaN or infinite; the model runs on finite inputs"
+            )));
+        }
+        check_array(y, y_len, "y")?;
+        let output = model.file.predict(&input)?;
+        // SAFETY: `y` is valid for `y_len == output.len()` writes (the caller's contract),
+        // non-NULL and aligned (checked); `input` is a copy, so `x == y` is fine.
+        unsafe { std::ptr::copy_nonoverlapping(output.as_ptr(), y, output.len()) };
         Ok(())
     })
 }

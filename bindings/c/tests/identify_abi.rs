@@ -411,13 +411,10 @@ fn options_out_of_range_are_refused_before_allocating() {
     let cases: Vec<(Edit, &str)> = vec![
         (
             Box::new(|o| o.operators = 0),
-            "operators 0 is out of range: give 1 to 1000",
+            "number of play operators \"0\": give at least 1",
         ),
-        // Far beyond memory: refused by the bound, never allocated.
-        (
-            Box::new(|o| o.operators = usize::MAX),
-            "operators 18446744073709551615 is out of range",
-        ),
+        // Far beyond memory: refused by the library's bound, never allocated.
+        (Box::new(|o| o.operators = usize::MAX), "give at most 1000"),
         (
             Box::new(|o| o.threshold_count = 3),
             "thresholds (threshold_count is not 0) is NULL",
@@ -427,9 +424,16 @@ fn options_out_of_range_are_refused_before_allocating() {
                 o.thresholds = thresholds.as_ptr();
                 o.threshold_count = 0;
             }),
-            "threshold_count 0 is out of range",
+            "give at least one threshold",
         ),
-        (Box::new(|o| o.operators = 1000), "regressor matrix"),
+        (
+            Box::new(move |o| {
+                o.thresholds = thresholds.as_ptr();
+                o.threshold_count = usize::MAX; // refused before the array is read
+            }),
+            "threshold_count 18446744073709551615 is more than the 1000",
+        ),
+        (Box::new(|o| o.operators = 1000), "more than the 50000000"),
         (
             Box::new(|o| o.solver = 2),
             "solver 2 is not a HystcompSolver",
@@ -466,21 +470,21 @@ fn options_out_of_range_are_refused_before_allocating() {
                 o.solver = 1;
                 o.particles = 1
             }),
-            "particles 1 is out of range: give 2 to 1000",
+            "a swarm has 2 to 1000 particles",
         ),
         (
             Box::new(|o| {
                 o.solver = 1;
                 o.particles = 1_000_000
             }),
-            "particles 1000000 is out of range",
+            "particles \"1000000\"",
         ),
         (
             Box::new(|o| {
                 o.solver = 1;
                 o.iterations = 0
             }),
-            "iterations 0 is out of range",
+            "give 1 to 100000 iterations",
         ),
         (
             Box::new(|o| {
@@ -490,13 +494,13 @@ fn options_out_of_range_are_refused_before_allocating() {
             "iterations",
         ),
     ];
-    // 1000 samples x 1004 columns would fit in memory; the regressor bound needs more samples.
-    let long_v: Vec<f64> = voltage.iter().cycle().take(140_000).copied().collect();
-    let long_y: Vec<f64> = displacement.iter().cycle().take(140_000).copied().collect();
+    // 1000 samples x 1000 operators would fit; the regressor bound needs more samples.
+    let long_v: Vec<f64> = voltage.iter().cycle().take(60_000).copied().collect();
+    let long_y: Vec<f64> = displacement.iter().cycle().take(60_000).copied().collect();
     for (edit, needle) in cases {
         let mut o = default_options();
         edit(&mut o);
-        let (v, y) = if needle == "regressor matrix" {
+        let (v, y) = if needle == "more than the 50000000" {
             (&long_v[..], &long_y[..])
         } else {
             (&voltage[..], &displacement[..])

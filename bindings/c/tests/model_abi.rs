@@ -8,7 +8,7 @@ use std::ptr::{null, null_mut};
 
 use hystcomp::*;
 use hystcomp_io::compensator::{Method, ScaledCompensator};
-use hystcomp_io::model_file::ModelFile;
+use hystcomp_io::model_file::{CreepPart, ModelFile, VibrationPart};
 use proptest::prelude::*;
 
 const OK: c_int = HystcompStatus::Ok as c_int;
@@ -110,6 +110,61 @@ fn file_of(m: *const HystcompModel) -> ModelFile {
     .unwrap();
     file.description = text(v.description);
     file.identification = text(v.identification_json).map(|t| serde_json::from_str(&t).unwrap());
+    // SAFETY (the links): the arrays point into the live model, of their stated lengths.
+    if v.creep_elements > 0 {
+        file.creep = Some(CreepPart {
+            origin: v.creep_origin,
+            time_constants_s: unsafe {
+                std::slice::from_raw_parts(v.creep_time_constants_s, v.creep_elements)
+            }
+            .to_vec(),
+            weights: unsafe { std::slice::from_raw_parts(v.creep_weights, v.creep_elements) }
+                .to_vec(),
+        });
+    }
+    if v.vibration_numerator_len > 0 {
+        file.vibration = Some(VibrationPart {
+            delay_samples: v.vibration_delay_samples,
+            numerator: unsafe {
+                std::slice::from_raw_parts(v.vibration_numerator, v.vibration_numerator_len)
+            }
+            .to_vec(),
+            denominator: unsafe {
+                std::slice::from_raw_parts(v.vibration_denominator, v.vibration_denominator_len)
+            }
+            .to_vec(),
+        });
+    }
+    file.sample_rate_hz = (v.sample_rate_hz != 0.0).then_some(v.sample_rate_hz);
+    file
+}
+
+/// `file` as this build writes it (format version 2: a version-1 file differs only by that).
+fn current(mut file: ModelFile) -> ModelFile {
+    file.format_version = hystcomp_io::model_file::FORMAT_VERSION;
+    file
+}
+
+/// Table 1 with creep and vibration links (format version 2): creep of 1.5 % over two time
+/// constants, a first-order vibration link of unit static gain, two samples of delay.
+fn chained_file() -> ModelFile {
+    let mut file = ModelFile::load(std::path::Path::new(
+        model_path("table1-plant.json").to_str().unwrap(),
+    ))
+    .unwrap();
+    file.format_version = hystcomp_io::model_file::FORMAT_VERSION;
+    file.sample_rate_hz = Some(10_000.0);
+    file.creep = Some(CreepPart {
+        origin: 0.0,
+        time_constants_s: vec![0.01, 0.1],
+        weights: vec![0.01, 0.005],
+    });
+    file.vibration = Some(VibrationPart {
+        delay_samples: 2,
+        numerator: vec![0.3],
+        denominator: vec![1.0, -0.7],
+    });
+    file.validate().expect("a valid chained model");
     file
 }
 
@@ -127,6 +182,7 @@ fn a_loaded_model_gives_the_files_values_and_rebuilds_bit_for_bit() {
     for name in ["table1-plant.json", "table2-inverse.json"] {
         let path = model_path(name);
         let reference = ModelFile::load(std::path::Path::new(path.to_str().unwrap())).unwrap();
+        let reference = current(reference);
         let m = load(&path).unwrap();
         assert_eq!(file_of(m), reference, "{name}");
         // Built again from its own values: the same model, another handle.
@@ -512,4 +568,162 @@ fn one_shot_compensation_refuses_bad_arguments_and_reports_nan() {
     }
     free(m);
     free(inverse);
+}
+
+#[test]
+fn a_model_with_creep_and_vibration_keeps_its_links_and_runs_its_chain() {
+    let dir = tempfile::tempdir().unwrap();
+    let file = chained_file();
+    let path = dir.path().join("chained.json");
+    file.save(&path).unwrap();
+    let m = load(&CString::new(path.to_str().unwrap()).unwrap()).unwrap();
+    assert_eq!(file_of(m), file);
+    let again = from_values(&values_of(m)).unwrap();
+    assert_eq!(file_of(again), file);
+    // Predicted through the whole chain, as the library predicts.
+    let x: Vec<f64> = (0..4000)
+        .map(|k| 5.0 + 4.0 * (k as f64 * 3e-3).sin())
+        .collect();
+    let mut y = vec![0.0; x.len()];
+    // SAFETY: a live handle and arrays of the stated lengths.
+    check(unsafe { hystcomp_model_predict(again, x.as_ptr(), x.len(), y.as_mut_ptr(), y.len()) })
+        .unwrap();
+    assert_eq!(y, file.predict(&x).unwrap());
+    // In place.
+    let mut in_place = x.clone();
+    let p = in_place.as_mut_ptr();
+    // SAFETY: the same array as input and output, of the stated length.
+    check(unsafe { hystcomp_model_predict(again, p, x.len(), p, x.len()) }).unwrap();
+    assert_eq!(in_place, y);
+    // The one-shot compensation is the library's aligned process: it inverts the chain.
+    let (status, v, _) = compensate(again, c"ihc", None, &y);
+    assert_eq!(status, OK, "{}", last_error());
+    let mut reference = ScaledCompensator::new(&file, Method::Ihc, None).unwrap();
+    let mut expected = vec![0.0; y.len()];
+    reference.process(&y, &mut expected).unwrap();
+    assert_eq!(v, expected);
+    let mut compensator = null_mut();
+    let mut preview = usize::MAX;
+    // SAFETY: live handles and valid out-pointers.
+    unsafe {
+        check(hystcomp_compensator_from_model(
+            again,
+            c"ihc".as_ptr(),
+            0.0,
+            0.0,
+            0,
+            &mut compensator,
+        ))
+        .unwrap();
+        check(hystcomp_compensator_preview(compensator, &mut preview)).unwrap();
+        assert_eq!(preview, reference.preview());
+        assert!(preview >= 2, "the delay needs a preview: {preview}");
+        assert_eq!(
+            hystcomp_compensator_preview(compensator, null_mut()),
+            NULL_POINTER
+        );
+        hystcomp_compensator_free(compensator);
+    }
+    // A forward MPIM handle would leave the links out: refused.
+    let mut mpim = std::ptr::dangling_mut::<HystcompMpim>();
+    // SAFETY: a live handle and a valid out-pointer.
+    let (status, message) =
+        check(unsafe { hystcomp_mpim_from_model(again, &mut mpim) }).unwrap_err();
+    assert_eq!(status, INVALID_ARGUMENT);
+    assert!(message.contains("hystcomp_model_predict"), "{message}");
+    assert!(mpim.is_null());
+    // Bad links, each refused with its name, before any array is read when a length is wrong.
+    let good = values_of(m);
+    let nothing = [f64::NAN; 1];
+    type Edit = Box<dyn Fn(&mut HystcompModelValues)>;
+    let cases: Vec<(Edit, c_int, &str)> = vec![
+        (
+            Box::new(|v| v.creep_elements = 65),
+            INVALID_ARGUMENT,
+            "creep_elements 65",
+        ),
+        (
+            Box::new(|v| v.creep_elements = usize::MAX),
+            INVALID_ARGUMENT,
+            "creep_elements",
+        ),
+        (
+            Box::new(|v| v.vibration_numerator_len = 18),
+            INVALID_ARGUMENT,
+            "vibration_numerator_len 18",
+        ),
+        (
+            Box::new(|v| v.vibration_denominator_len = usize::MAX),
+            INVALID_ARGUMENT,
+            "vibration_denominator_len",
+        ),
+        (
+            Box::new(|v| v.creep_weights = null()),
+            NULL_POINTER,
+            "creep_weights",
+        ),
+        (
+            Box::new(|v| v.vibration_denominator = null()),
+            NULL_POINTER,
+            "vibration_denominator",
+        ),
+        (
+            Box::new(|v| v.sample_rate_hz = 0.0),
+            INVALID_ARGUMENT,
+            "sample_rate_hz",
+        ),
+        (
+            Box::new(|v| v.sample_rate_hz = f64::NAN),
+            INVALID_ARGUMENT,
+            "sample_rate_hz NaN",
+        ),
+        (
+            Box::new(move |v| v.creep_time_constants_s = nothing.as_ptr()),
+            INVALID_ARGUMENT,
+            "creep",
+        ),
+        (
+            Box::new(|v| v.vibration_denominator_len = 1),
+            INVALID_ARGUMENT,
+            "vibration",
+        ),
+    ];
+    for (edit, status, needle) in cases {
+        let mut values = good;
+        edit(&mut values);
+        let (found, message) = from_values(&values).unwrap_err();
+        assert_eq!(found, status, "{needle}: {message}");
+        assert!(message.contains(needle), "{needle}: {message}");
+    }
+    // SAFETY: the NULL pointers are the test.
+    unsafe {
+        assert_eq!(
+            hystcomp_model_predict(null(), x.as_ptr(), 3, y.as_mut_ptr(), 3),
+            NULL_POINTER
+        );
+        assert_eq!(
+            hystcomp_model_predict(m, null(), 3, y.as_mut_ptr(), 3),
+            NULL_POINTER
+        );
+        assert_eq!(
+            hystcomp_model_predict(m, x.as_ptr(), 3, null_mut(), 3),
+            NULL_POINTER
+        );
+        assert_eq!(
+            hystcomp_model_predict(m, x.as_ptr(), 3, y.as_mut_ptr(), 2),
+            INVALID_ARGUMENT
+        );
+        assert_eq!(
+            hystcomp_model_predict(m, x.as_ptr(), 0, y.as_mut_ptr(), 0),
+            INVALID_ARGUMENT
+        );
+        let bad = [1.0, f64::NAN, 2.0];
+        assert_eq!(
+            hystcomp_model_predict(m, bad.as_ptr(), 3, y.as_mut_ptr(), 3),
+            INVALID_ARGUMENT
+        );
+        assert!(last_error().contains("x[1] is NaN"), "{}", last_error());
+    }
+    free(m);
+    free(again);
 }

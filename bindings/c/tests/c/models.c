@@ -32,7 +32,7 @@ static const double WEIGHTS[10] = {0.2313, 0.3059, 0.0155, 0.0752, 0.0683,
                                    0.0252, 0.0035, 0.0094, 0.0264, 0.0032};
 
 int main(int argc, char **argv) {
-    static double volts[N], um[N], desired[N], drive[N], reached[N];
+    static double volts[N], um[N], desired[N], drive[N], reached[N], predicted[N];
     char path[4096];
     HystcompMpim *table1 = NULL;
     HystcompModel *model = NULL, *copy = NULL, *loaded = NULL;
@@ -105,6 +105,9 @@ int main(int argc, char **argv) {
     }
     CHECK(worst < 1e-9);
     hystcomp_mpim_free(table1);
+    /* The model run forward in one call: the same as the forward MPIM. */
+    CHECK(hystcomp_model_predict(loaded, drive, N, predicted, N) == HYSTCOMP_STATUS_OK);
+    CHECK(memcmp(predicted, reached, sizeof predicted) == 0);
 
     /* The indices of the identified model's prediction against the record. */
     CHECK(hystcomp_e_m(desired, N, reached, N, &e_m) == HYSTCOMP_STATUS_OK && e_m < 1e-9);
