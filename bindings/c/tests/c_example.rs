@@ -7,31 +7,11 @@
 //! usually fresh already: `cargo test` builds the library's every crate type); the examples are
 //! compiled into `<target>/c-examples`.
 
-mod support;
-
 use std::path::PathBuf;
 use std::process::Command;
 use std::sync::OnceLock;
 
-use support::{available, cargo, run, target_dir, workspace_root};
-
-/// Builds the static library once; its path.
-fn static_library() -> &'static PathBuf {
-    static LIBRARY: OnceLock<PathBuf> = OnceLock::new();
-    LIBRARY.get_or_init(|| {
-        let root = workspace_root();
-        let target_dir = target_dir();
-        run(
-            cargo()
-                .current_dir(&root)
-                .args(["build", "--quiet", "-p", "hystcomp-c", "--lib"]),
-            "the static library of bindings/c must build",
-        );
-        let library = target_dir.join("debug/libhystcomp.a");
-        assert!(library.is_file(), "{} was not built", library.display());
-        library
-    })
-}
+use hystcomp_testkit::{available, c_static_library, run, target_dir, workspace_root};
 
 /// Compiles `examples/c/{name}.c` against the committed header and the static library, with
 /// every warning an error; the path of the executable.
@@ -43,7 +23,7 @@ fn compile_example(name: &str) -> PathBuf {
 /// in `<target>/c-examples`, as [`compile_example`].
 fn compile(source: &str, name: &str) -> PathBuf {
     let root = workspace_root();
-    let library = static_library();
+    let library = c_static_library();
     assert!(
         available("gcc"),
         "gcc is needed to compile examples/c (apt-get install gcc)"
@@ -211,7 +191,7 @@ fn readme_c_build_commands_work_from_the_repository_root() {
     assert_eq!(commands[2], format!("./{}", gcc[output_at + 1]));
     let program = target_dir().join("c-examples").join("readme-minimal");
     std::fs::create_dir_all(program.parent().unwrap()).unwrap();
-    let library = static_library();
+    let library = c_static_library();
     let args: Vec<std::ffi::OsString> = gcc[1..]
         .iter()
         .enumerate()
@@ -295,7 +275,7 @@ fn what_the_readme_c_steps_build_is_ignored_by_git() {
 #[test]
 fn makefile_builds_and_runs_both_examples() {
     assert!(available("make"), "make is needed (apt-get install make)");
-    static_library();
+    c_static_library();
     let out = target_dir().join("c-examples").join("make");
     let _ = std::fs::remove_dir_all(&out);
     let output = run(

@@ -7,15 +7,13 @@
 //! Without the target (and no way to add it with rustup) the test says so and builds the core
 //! without default features on the host instead.
 
-mod support;
-
 use std::mem::size_of;
 use std::path::PathBuf;
 use std::process::Command;
 
 use hystcomp_core::{Dihc, Ihc, Mpim, Wihc};
+use hystcomp_testkit::{cargo, run, workspace_root};
 use object::{Object, ObjectSection, ObjectSymbol};
-use support::{cargo, run, workspace_root};
 
 const TARGET: &str = "thumbv7em-none-eabihf";
 const LABELS: [&str; 4] = ["IHC", "WIHC", "DIHC", "MPIM"];

@@ -14,11 +14,19 @@
 //! The real records live beside the repository, in `../shared/data` (see the README); they are
 //! not copied into it. [`shared_data`] finds one (or `$HYSTCOMP_SHARED_DATA` instead of
 //! `../shared/data`) and records a skip when it is absent.
+//!
+//! # Other tools
+//! Tests that drive other tools (cargo, gcc, octave) share [`target_dir`], [`cargo`] (a nested
+//! cargo on the same target directory), [`run`] (a command whose failure shows its output),
+//! [`available`] and [`c_static_library`] (the C ABI's static library, built once per test
+//! binary).
 
 use std::fmt::Display;
 use std::fs::OpenOptions;
 use std::io::Write as _;
 use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+use std::sync::OnceLock;
 
 /// The environment variable `.ci/run` sets to `1`: prerequisites it installs must be present.
 pub const CI_VARIABLE: &str = "HYSTCOMP_CI";
@@ -37,20 +45,87 @@ pub fn workspace_root() -> PathBuf {
         .unwrap_or_else(|_| Path::new(env!("CARGO_MANIFEST_DIR")).join("../.."))
 }
 
+/// The target directory of the outer `cargo test` (`CARGO_TARGET_DIR`, or `target/` in the
+/// workspace). A nested `cargo build` may share it: cargo holds its lock while it builds, not
+/// while the test binaries run, and builds of other feature sets get other artifact hashes.
+/// Sharing it means the nested build reuses what `cargo test` already compiled.
+pub fn target_dir() -> PathBuf {
+    std::env::var_os("CARGO_TARGET_DIR")
+        .map(PathBuf::from)
+        .map(|dir| {
+            if dir.is_absolute() {
+                dir
+            } else {
+                workspace_root().join(dir)
+            }
+        })
+        .unwrap_or_else(|| workspace_root().join("target"))
+}
+
 /// The skip log: `$CARGO_TARGET_DIR/test-skips.log`, or `target/test-skips.log` in the
 /// workspace.
 pub fn skip_log() -> PathBuf {
-    let target = std::env::var_os("CARGO_TARGET_DIR")
-        .map(PathBuf::from)
-        .map(|t| {
-            if t.is_absolute() {
-                t
-            } else {
-                workspace_root().join(t)
-            }
-        })
-        .unwrap_or_else(|| workspace_root().join("target"));
-    target.join(SKIP_LOG)
+    target_dir().join(SKIP_LOG)
+}
+
+/// The cargo that runs these tests (or `cargo` from the PATH), for a nested build on the same
+/// target directory (see [`target_dir`]), without the outer build's target triple or flags.
+pub fn cargo() -> Command {
+    let cargo = std::env::var_os("CARGO").unwrap_or_else(|| "cargo".into());
+    let mut command = Command::new(cargo);
+    command
+        .env("CARGO_TARGET_DIR", target_dir())
+        .env_remove("CARGO_BUILD_TARGET")
+        .env_remove("RUSTFLAGS")
+        .env_remove("CARGO_ENCODED_RUSTFLAGS");
+    command
+}
+
+/// Runs `command`, panicking with its output (and `hint`) when it cannot start or fails.
+pub fn run(command: &mut Command, hint: &str) -> Output {
+    let shown = format!("{command:?}");
+    let output = command
+        .output()
+        .unwrap_or_else(|e| panic!("could not run {shown}: {e}. {hint}"));
+    if !output.status.success() {
+        panic!(
+            "{shown} failed ({}):\n--- stdout\n{}\n--- stderr\n{}\n{hint}",
+            output.status,
+            String::from_utf8_lossy(&output.stdout),
+            String::from_utf8_lossy(&output.stderr)
+        );
+    }
+    output
+}
+
+/// `true` when `program --version` runs.
+pub fn available(program: &str) -> bool {
+    Command::new(program)
+        .arg("--version")
+        .output()
+        .is_ok_and(|o| o.status.success())
+}
+
+/// The C ABI's static library (`libhystcomp.a` of `bindings/c`, debug profile), built by a
+/// nested `cargo build -p hystcomp-c --lib` once per test binary (usually fresh already:
+/// `cargo test` builds every crate type of the library).
+pub fn c_static_library() -> &'static PathBuf {
+    static LIBRARY: OnceLock<PathBuf> = OnceLock::new();
+    LIBRARY.get_or_init(|| {
+        run(
+            cargo().current_dir(workspace_root()).args([
+                "build",
+                "--quiet",
+                "-p",
+                "hystcomp-c",
+                "--lib",
+            ]),
+            "the static library of bindings/c must build",
+        );
+        let library = target_dir().join("debug/libhystcomp.a");
+        assert!(library.is_file(), "{} was not built", library.display());
+        library
+    })
 }
 
 /// `true` under CI (`HYSTCOMP_CI=1`).
