@@ -16,8 +16,8 @@ function varargout = identify(varargin)
 %     'method'            'ls' (least squares, the global optimum; default) or 'pso' (the
 %                         paper's particle swarm: 'seed', 'particles', 'iterations', 'polish')
 %     'warmup'            'auto' (default) or a number of leading samples left out of the fit
-%     'holdout'           fraction of the samples at the end held out and reported (default 0;
-%                         the command line's default is 0.2)
+%     'holdout'           fraction of the samples at the end held out of the fit and reported
+%                         (default 0.2, as the command line and the Python package)
 %     'offset'            'fit' (default, for sensors with an arbitrary zero), 'none' or a
 %                         value in the displacement's unit
 %     'margin'            smallest branch slope kept, normalised (default 0.001)

@@ -21,8 +21,8 @@ v = data(:, 1);
 y = data(:, 5);
 
 % Identification: least squares, 10 play operators (the paper's n), the last 20 % held out.
-plant = hystcomp.identify(v, y, 'n', 10, 'direction', 'plant', 'holdout', 0.2);
-inverse = hystcomp.identify(v, y, 'n', 10, 'direction', 'inverse', 'holdout', 0.2);
+plant = hystcomp.identify(v, y, 'n', 10, 'direction', 'plant');
+inverse = hystcomp.identify(v, y, 'n', 10, 'direction', 'inverse');
 fprintf('plant model:   fit %.3f %% RMS of the displacement range, held out %.3f %%\n', ...
         plant.report.fit.rms_percent, plant.report.holdout.rms_percent);
 fprintf('inverse model: fit %.3f %% RMS of the voltage range, held out %.3f %%\n', ...

@@ -63,6 +63,7 @@ static void cmd_identify(int nlhs, mxArray *plhs[], int nrhs, const mxArray *prh
              (unsigned long)ny);
     }
     hystcomp_identify_options_default(&o);
+    o.holdout = 0.2; /* as `hystcomp identify` and the Python package hold out */
     if ((nrhs - 3) % 2 != 0) {
         fail("hystcomp:invalidOption", "options come in name, value pairs; the last name has no "
              "value");
