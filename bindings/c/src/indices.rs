@@ -3,7 +3,7 @@
 
 use std::ffi::c_int;
 
-use hystcomp_indices::{e_m_percent, e_mhe_percent, e_rms_percent};
+use hystcomp_indices::{IndexError, e_m_percent, e_mhe_percent, e_rms_percent};
 
 use crate::args::{signal, write_out};
 use crate::boundary::{Failure, boundary};
@@ -13,23 +13,32 @@ use crate::boundary::{Failure, boundary};
 pub const HYSTCOMP_DEFAULT_MHE_BINS: usize = 100;
 const _: () = assert!(HYSTCOMP_DEFAULT_MHE_BINS == hystcomp_indices::DEFAULT_MHE_BINS);
 
-/// The desired and measured records, checked for NULL and emptiness (the index functions check
-/// lengths, NaN and a constant desired record themselves).
+/// Computes `index` of the desired and measured records (checked for NULL and emptiness here,
+/// for lengths, NaN and a constant desired record by the index) into `*percent`.
 ///
 /// # Safety
 /// `desired` and `measured` must point to `desired_len` and `measured_len` readable doubles or
-/// be NULL.
-unsafe fn records<'a>(
+/// be NULL; `percent` valid for one write or NULL.
+unsafe fn index(
     desired: *const f64,
     desired_len: usize,
     measured: *const f64,
     measured_len: usize,
-) -> Result<(&'a [f64], &'a [f64]), Failure> {
-    // SAFETY: forwarded contract.
-    let desired = unsafe { signal(desired, desired_len, "desired") }?;
-    // SAFETY: forwarded contract.
-    let measured = unsafe { signal(measured, measured_len, "measured") }?;
-    Ok((desired, measured))
+    percent: *mut f64,
+    index: impl FnOnce(&[f64], &[f64]) -> Result<f64, IndexError>,
+) -> c_int {
+    boundary(|| {
+        // SAFETY: forwarded contract.
+        let d = unsafe { signal(desired, desired_len, "desired") }?;
+        // SAFETY: forwarded contract.
+        let y = unsafe { signal(measured, measured_len, "measured") }?;
+        if percent.is_null() {
+            return Err(Failure::null("percent"));
+        }
+        let value = index(d, y)?;
+        // SAFETY: non-NULL, valid for a write (the caller's contract).
+        unsafe { write_out(percent, value, "percent") }
+    })
 }
 
 /// (D1), corrected (ERRATA item 2): writes `max |y - y_d| / (max y_d - min y_d) * 100` to
@@ -50,16 +59,17 @@ pub unsafe extern "C" fn hystcomp_e_m(
     measured_len: usize,
     percent: *mut f64,
 ) -> c_int {
-    boundary(|| {
-        // SAFETY: forwarded contract.
-        let (d, y) = unsafe { records(desired, desired_len, measured, measured_len) }?;
-        if percent.is_null() {
-            return Err(Failure::null("percent"));
-        }
-        let value = e_m_percent(d, y)?;
-        // SAFETY: non-NULL, valid for a write (the caller's contract).
-        unsafe { write_out(percent, value, "percent") }
-    })
+    // SAFETY: forwarded contract.
+    unsafe {
+        index(
+            desired,
+            desired_len,
+            measured,
+            measured_len,
+            percent,
+            e_m_percent,
+        )
+    }
 }
 
 /// (D2): writes `sqrt(mean (y - y_d)^2) / (max y_d - min y_d) * 100` to `*percent`.
@@ -76,16 +86,17 @@ pub unsafe extern "C" fn hystcomp_e_rms(
     measured_len: usize,
     percent: *mut f64,
 ) -> c_int {
-    boundary(|| {
-        // SAFETY: forwarded contract.
-        let (d, y) = unsafe { records(desired, desired_len, measured, measured_len) }?;
-        if percent.is_null() {
-            return Err(Failure::null("percent"));
-        }
-        let value = e_rms_percent(d, y)?;
-        // SAFETY: non-NULL, valid for a write (the caller's contract).
-        unsafe { write_out(percent, value, "percent") }
-    })
+    // SAFETY: forwarded contract.
+    unsafe {
+        index(
+            desired,
+            desired_len,
+            measured,
+            measured_len,
+            percent,
+            e_rms_percent,
+        )
+    }
 }
 
 /// Eq. (12) (ERRATA item 6): writes to `*percent` the largest vertical width of the `y` versus
@@ -108,14 +119,15 @@ pub unsafe extern "C" fn hystcomp_e_mhe(
     bins: usize,
     percent: *mut f64,
 ) -> c_int {
-    boundary(|| {
-        // SAFETY: forwarded contract.
-        let (d, y) = unsafe { records(desired, desired_len, measured, measured_len) }?;
-        if percent.is_null() {
-            return Err(Failure::null("percent"));
-        }
-        let value = e_mhe_percent(d, y, bins)?;
-        // SAFETY: non-NULL, valid for a write (the caller's contract).
-        unsafe { write_out(percent, value, "percent") }
-    })
+    // SAFETY: forwarded contract.
+    unsafe {
+        index(
+            desired,
+            desired_len,
+            measured,
+            measured_len,
+            percent,
+            |d, y| e_mhe_percent(d, y, bins),
+        )
+    }
 }

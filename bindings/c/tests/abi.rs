@@ -5,32 +5,11 @@
 use std::ffi::{CStr, CString, c_int};
 use std::ptr::{null, null_mut};
 
+mod common;
+
+use common::*;
 use hystcomp::*;
 use hystcomp_core::paper::{TABLE1, TABLE2};
-
-const OK: c_int = HystcompStatus::Ok as c_int;
-const NULL_POINTER: c_int = HystcompStatus::NullPointer as c_int;
-const INVALID_ARGUMENT: c_int = HystcompStatus::InvalidArgument as c_int;
-const NOT_INVERTIBLE: c_int = HystcompStatus::NotInvertible as c_int;
-const IO: c_int = HystcompStatus::Io as c_int;
-const INVALID_MODEL_FILE: c_int = HystcompStatus::InvalidModelFile as c_int;
-const WRONG_DIRECTION: c_int = HystcompStatus::WrongDirection as c_int;
-const NON_FINITE_INPUT: c_int = HystcompStatus::NonFiniteInput as c_int;
-
-fn last_error() -> String {
-    // SAFETY: the library returns a NUL-terminated thread-local string, never NULL.
-    unsafe { CStr::from_ptr(hystcomp_last_error_message()) }
-        .to_string_lossy()
-        .into_owned()
-}
-
-fn model_path(name: &str) -> CString {
-    CString::new(format!(
-        "{}/../../models/{name}",
-        env!("CARGO_MANIFEST_DIR")
-    ))
-    .unwrap()
-}
 
 /// A compensator from a model file, or the status and message.
 fn from_file(

@@ -7,6 +7,9 @@
 use std::ffi::{CStr, c_int};
 use std::ptr::{null, null_mut};
 
+mod common;
+
+use common::*;
 use hystcomp::*;
 use hystcomp_core::Mpim;
 use hystcomp_core::paper::TABLE1;
@@ -17,18 +20,6 @@ use hystcomp_io::model_file::Direction;
 use proptest::prelude::*;
 use rand::{RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
-
-const OK: c_int = HystcompStatus::Ok as c_int;
-const NULL_POINTER: c_int = HystcompStatus::NullPointer as c_int;
-const INVALID_ARGUMENT: c_int = HystcompStatus::InvalidArgument as c_int;
-const IDENTIFICATION_FAILED: c_int = HystcompStatus::IdentificationFailed as c_int;
-
-fn last_error() -> String {
-    // SAFETY: the library returns a NUL-terminated thread-local string, never NULL.
-    unsafe { CStr::from_ptr(hystcomp_last_error_message()) }
-        .to_string_lossy()
-        .into_owned()
-}
 
 /// A record of Table 1's MPIM: a decaying 1 Hz sine from `offset_v`, 0 .. 10 V, displacement
 /// in um plus seeded sensor noise of `noise_um` and a sensor offset.

@@ -6,34 +6,13 @@
 use std::ffi::{CStr, CString, c_char, c_int};
 use std::ptr::{null, null_mut};
 
+mod common;
+
+use common::*;
 use hystcomp::*;
 use hystcomp_io::compensator::{Method, ScaledCompensator};
 use hystcomp_io::model_file::{CreepPart, ModelFile, VibrationPart};
 use proptest::prelude::*;
-
-const OK: c_int = HystcompStatus::Ok as c_int;
-const NULL_POINTER: c_int = HystcompStatus::NullPointer as c_int;
-const INVALID_ARGUMENT: c_int = HystcompStatus::InvalidArgument as c_int;
-const IO: c_int = HystcompStatus::Io as c_int;
-const INVALID_MODEL_FILE: c_int = HystcompStatus::InvalidModelFile as c_int;
-const WRONG_DIRECTION: c_int = HystcompStatus::WrongDirection as c_int;
-const NOT_INVERTIBLE: c_int = HystcompStatus::NotInvertible as c_int;
-const NON_FINITE_INPUT: c_int = HystcompStatus::NonFiniteInput as c_int;
-
-fn last_error() -> String {
-    // SAFETY: the library returns a NUL-terminated thread-local string, never NULL.
-    unsafe { CStr::from_ptr(hystcomp_last_error_message()) }
-        .to_string_lossy()
-        .into_owned()
-}
-
-fn model_path(name: &str) -> CString {
-    CString::new(format!(
-        "{}/../../models/{name}",
-        env!("CARGO_MANIFEST_DIR")
-    ))
-    .unwrap()
-}
 
 /// Turns a status into a result with the message.
 fn check(status: c_int) -> Result<(), (c_int, String)> {

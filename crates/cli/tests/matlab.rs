@@ -19,6 +19,15 @@ use hystcomp_testkit::{
     c_static_library, dbo_record, on_path, require_tool, run, target_dir, workspace_root,
 };
 
+/// Whether Octave and mkoctfile are here (a skip is logged when not; under CI a failure).
+fn octave_here() -> bool {
+    require_tool(
+        "octave",
+        on_path("octave-cli") && on_path("mkoctfile"),
+        "apt-get install octave liboctave-dev gnuplot-nox",
+    )
+}
+
 /// An Octave string literal of a path.
 fn quoted(path: &Path) -> String {
     format!("'{}'", path.display().to_string().replace('\'', "''"))
@@ -64,11 +73,7 @@ fn identify_with_the_cli(record: &Path, direction: &str, output: &Path) {
 
 #[test]
 fn octave_builds_the_mex_file_and_passes_the_binding_tests() {
-    if !require_tool(
-        "octave",
-        on_path("octave-cli") && on_path("mkoctfile"),
-        "apt-get install octave liboctave-dev gnuplot-nox",
-    ) {
+    if !octave_here() {
         return;
     }
     let root = workspace_root();
@@ -141,11 +146,7 @@ fn block(path: &Path, heading: &str, language: &str) -> String {
 
 #[test]
 fn the_readme_blocks_and_the_example_run() {
-    if !require_tool(
-        "octave",
-        on_path("octave-cli") && on_path("mkoctfile"),
-        "apt-get install octave liboctave-dev gnuplot-nox",
-    ) {
+    if !octave_here() {
         return;
     }
     let root = workspace_root();
