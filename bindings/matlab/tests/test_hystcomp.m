@@ -30,13 +30,13 @@ for k = 1:size(tests, 1)
     try
         note = tests{k, 2}();
         if isempty(note)
-            printf('PASS %s\n', name);
+            fprintf('PASS %s\n', name);
         else
-            printf('PASS %s (%s)\n', name, note);
+            fprintf('PASS %s (%s)\n', name, note);
         end
     catch e
         failures{end + 1} = sprintf('%s: %s (%s)', name, e.message, e.identifier); %#ok<AGROW>
-        printf('FAIL %s\n  %s\n', name, failures{end});
+        fprintf('FAIL %s\n  %s\n', name, failures{end});
     end
 end
 % Every compensator the tests made is gone.
@@ -44,10 +44,10 @@ if hystcomp_mex('live_compensators') ~= 0
     failures{end + 1} = sprintf('%d compensator(s) still alive', hystcomp_mex('live_compensators'));
 end
 if isempty(failures)
-    printf('ALL PASSED\n');
+    fprintf('ALL PASSED\n');
 else
-    printf('%d FAILED:\n', numel(failures));
-    printf('  %s\n', failures{:});
+    fprintf('%d FAILED:\n', numel(failures));
+    fprintf('  %s\n', failures{:});
     exit(1);
 end
 end
