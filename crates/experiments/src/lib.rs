@@ -9,11 +9,16 @@
 
 #![warn(missing_docs)]
 
+pub mod beyond;
+pub mod chain_excitation;
+pub mod duration;
 pub mod excitation;
 pub mod figures;
+pub mod full;
 pub mod reference;
 pub mod report;
 pub mod signals;
+pub mod speed;
 pub mod study;
 pub mod study_report;
 pub mod trajectory;

@@ -27,12 +27,17 @@ use hystcomp_identify::{
     Thresholds, Warmup, identify_observed,
 };
 use hystcomp_io::compensator::{CompensatorError, Method, ScaledCompensator};
-use hystcomp_io::model_file::Direction;
+use hystcomp_io::model_file::{Direction, ModelFile};
 use hystcomp_stage::{Stage, StageConfig, StageError, quasi_static_stroke_um};
+use rayon::prelude::*;
 use serde::Serialize;
 
+use crate::chain_excitation::ChainSegments;
+use crate::duration::{DurationStudy, run_duration};
 use crate::excitation::IdentificationExcitation;
+use crate::full::{FullOptions, FullPipeline, identify_full};
 use crate::indices::{DEFAULT_MHE_BINS, IndexError, TrackingIndices, check_mhe_bins};
+use crate::speed::{SpeedStudy, run_speed};
 use crate::{MultisineTrajectory, Reference};
 
 /// Particle swarm iterations of the study's `paper` pipeline.
@@ -65,6 +70,9 @@ pub struct StudyOptions {
     /// Bins of the `y_d` range for e_mhe (at most one per [`crate::indices::MIN_SAMPLES_PER_BIN`] samples of
     /// the evaluated period).
     pub mhe_bins: usize,
+    /// The `full` pipeline (hysteresis, creep and vibration) and what the excitation gains for
+    /// it.
+    pub full: FullOptions,
 }
 
 impl Default for StudyOptions {
@@ -82,6 +90,7 @@ impl Default for StudyOptions {
                 ..PsoOptions::default()
             },
             mhe_bins: DEFAULT_MHE_BINS,
+            full: FullOptions::default(),
         }
     }
 }
@@ -168,8 +177,14 @@ pub struct IdentificationRecord {
     pub command_v: Vec<f64>,
     /// Measured position, um.
     pub measured_um: Vec<f64>,
-    /// Samples used for identification (after decimation).
+    /// Samples used for identification (after decimation) by the `paper` and `exact`
+    /// pipelines.
     pub samples_used: usize,
+    /// The hysteresis excitation's samples (the record's first part; the `paper` and `exact`
+    /// pipelines identify on them).
+    pub hysteresis_samples: usize,
+    /// Where the chain's parts of the excitation lie in the record (sample indices).
+    pub chain_segments: ChainSegments,
 }
 
 /// One tracking run on the stage.
@@ -288,6 +303,12 @@ pub struct Study {
     pub uncompensated: TrackingRun,
     /// The `paper` and the `exact` pipelines, in that order.
     pub pipelines: Vec<Pipeline>,
+    /// The `full` pipeline: hysteresis, creep and vibration.
+    pub full: FullPipeline,
+    /// The duration study: the paper's trajectory for 200 s, and a held step.
+    pub duration: DurationStudy,
+    /// The speed study: the paper's trajectory time-compressed, and triangle rasters.
+    pub speed: SpeedStudy,
     /// The cross runs: particle swarm models with exact inverses, least-squares models with
     /// delayed ones (IHC and WIHC each).
     pub cross_runs: Vec<TrackingRun>,
@@ -329,8 +350,9 @@ fn check_run_lengths(options: &StudyOptions) -> Result<(), StudyError> {
     for (what, duration_s) in [
         (
             "identification excitation".to_owned(),
-            options.excitation.duration_s(),
+            options.excitation.duration_s() + options.full.excitation.duration_s(),
         ),
+        ("duration study run".to_owned(), crate::duration::DURATION_S),
         (
             format!("tracking run of {} periods", options.periods),
             options.periods as f64 * period_s,
@@ -383,16 +405,30 @@ pub fn run_study(
     observer.begin("excitation", 1);
     let mut excitation = options.excitation.clone();
     excitation.full_scale_v = full_scale;
-    let command = excitation.command_v(fs);
+    let mut command = excitation.command_v(fs);
+    let hysteresis_samples = command.len();
+    let (chain_part, mut chain_segments) = options
+        .full
+        .excitation
+        .command_v(full_scale, fs, command.last().copied().unwrap_or(0.0))
+        .map_err(|e| StudyError::Option(format!("the chain's excitation: {e}")))?;
+    for range in [
+        &mut chain_segments.rate,
+        &mut chain_segments.holds,
+        &mut chain_segments.vibration,
+    ] {
+        *range = range.start + hysteresis_samples..range.end + hysteresis_samples;
+    }
+    command.extend(chain_part);
     let mut stage = Stage::new(&options.stage, options.seed)?;
     let response = stage.run(&command);
-    let v: Vec<f64> = command
+    // The paper and exact pipelines: the hysteresis excitation alone.
+    let v: Vec<f64> = command[..hysteresis_samples]
         .iter()
         .step_by(options.decimation)
         .copied()
         .collect();
-    let y: Vec<f64> = response
-        .measured_position_um
+    let y: Vec<f64> = response.measured_position_um[..hysteresis_samples]
         .iter()
         .step_by(options.decimation)
         .copied()
@@ -402,6 +438,8 @@ pub fn run_study(
         command_v: command,
         measured_um: response.measured_position_um,
         samples_used: v.len(),
+        hysteresis_samples,
+        chain_segments,
     };
     observer.end();
 
@@ -485,6 +523,17 @@ pub fn run_study(
         3,
         observer,
     )?;
+    observer.begin("full chain", 1);
+    let (full_plant, full_inverse, full_identification_s) = identify_full(
+        &record.command_v,
+        &record.measured_um,
+        fs,
+        options.decimation,
+        record.chain_segments.vibration.clone(),
+        &base,
+        &options.full,
+    )?;
+    observer.end();
 
     // 3. Tracking.
     let reference = Reference::paper();
@@ -529,101 +578,123 @@ pub fn run_study(
     let gain = full_scale / stroke_um;
     let tracking_seed = options.seed.wrapping_add(1);
 
-    let jobs: Vec<(String, Option<Method>, Option<&Identification>)> = vec![
+    let jobs: Vec<(String, Option<Method>, Option<&ModelFile>)> = vec![
         ("uncompensated".into(), None, None),
         (
             "paper / ihc-delayed".into(),
             Some(Method::IhcDelayed),
-            Some(&paper_plant),
+            Some(&paper_plant.model),
         ),
         (
             "paper / wihc-delayed".into(),
             Some(Method::WihcDelayed),
-            Some(&paper_plant),
+            Some(&paper_plant.model),
         ),
         (
             "paper / dihc".into(),
             Some(Method::Dihc),
-            Some(&paper_inverse),
+            Some(&paper_inverse.model),
         ),
         (
             EXACT_IHC_LABEL.into(),
             Some(Method::Ihc),
-            Some(&exact_plant),
+            Some(&exact_plant.model),
         ),
         (
             "exact / wihc".into(),
             Some(Method::Wihc),
-            Some(&exact_plant),
+            Some(&exact_plant.model),
         ),
         (
             "exact / dihc".into(),
             Some(Method::Dihc),
-            Some(&exact_inverse),
+            Some(&exact_inverse.model),
+        ),
+        (
+            FULL_IHC_LABEL.into(),
+            Some(Method::Ihc),
+            Some(&full_plant.model),
+        ),
+        (
+            "full / wihc".into(),
+            Some(Method::Wihc),
+            Some(&full_plant.model),
+        ),
+        (
+            "full / dihc".into(),
+            Some(Method::Dihc),
+            Some(&full_inverse.model),
         ),
         (
             "PSO models / ihc".into(),
             Some(Method::Ihc),
-            Some(&paper_plant),
+            Some(&paper_plant.model),
         ),
         (
             "PSO models / wihc".into(),
             Some(Method::Wihc),
-            Some(&paper_plant),
+            Some(&paper_plant.model),
         ),
         (
             "LS models / ihc-delayed".into(),
             Some(Method::IhcDelayed),
-            Some(&exact_plant),
+            Some(&exact_plant.model),
         ),
         (
             "LS models / wihc-delayed".into(),
             Some(Method::WihcDelayed),
-            Some(&exact_plant),
+            Some(&exact_plant.model),
         ),
     ];
     observer.begin("tracking", jobs.len() as u64);
-    let mut runs = Vec::with_capacity(jobs.len());
-    for (k, (label, method, model)) in jobs.into_iter().enumerate() {
-        let (command_v, saturated) = match (method, model) {
-            (Some(method), Some(model)) => drive(model, method, &desired, full_scale, &label)?,
-            _ => (desired.iter().map(|y| y * gain).collect(), 0),
-        };
-        let measured = track(&options.stage, tracking_seed, &command_v)?;
-        let indices = evaluate(
-            &desired,
-            &measured,
-            evaluation_start,
-            options.mhe_bins,
-            &label,
-        )?;
-        let model_mismatch_rms_percent = match (method, model) {
-            (Some(m), Some(model)) if m.needs() == Direction::Plant => {
-                let predicted = model
-                    .model
-                    .predict(&command_v)
-                    .map_err(|e| StudyError::Option(e.to_string()))?;
-                let range = indices_range(&desired[evaluation_start..]);
-                let sum: f64 = predicted[evaluation_start..]
-                    .iter()
-                    .zip(&measured[evaluation_start..])
-                    .map(|(p, y)| (p - y).powi(2))
-                    .sum();
-                Some((sum / per_period as f64).sqrt() / range * 100.0)
-            }
-            _ => None,
-        };
-        runs.push(TrackingRun {
-            label,
-            method,
-            command_v,
-            measured_um: measured,
-            indices,
-            saturated,
-            model_mismatch_rms_percent,
-        });
-        observer.advance(k as u64 + 1);
-    }
+    let job_count = jobs.len() as u64;
+    // Independent runs: in parallel, each on its own stage with the same noise seed.
+    let runs: Vec<TrackingRun> = jobs
+        .into_par_iter()
+        .map(
+            |(label, method, model)| -> Result<TrackingRun, StudyError> {
+                let (command_v, saturated) = match (method, model) {
+                    (Some(method), Some(model)) => {
+                        drive(model, method, &desired, full_scale, &label)?
+                    }
+                    _ => (desired.iter().map(|y| y * gain).collect(), 0),
+                };
+                let measured = track(&options.stage, tracking_seed, &command_v)?;
+                let indices = evaluate(
+                    &desired,
+                    &measured,
+                    evaluation_start,
+                    options.mhe_bins,
+                    &label,
+                )?;
+                let model_mismatch_rms_percent = match (method, model) {
+                    (Some(m), Some(model)) if m.needs() == Direction::Plant => {
+                        let predicted = model
+                            .predict(&command_v)
+                            .map_err(|e| StudyError::Option(e.to_string()))?;
+                        let range = indices_range(&desired[evaluation_start..]);
+                        let sum: f64 = predicted[evaluation_start..]
+                            .iter()
+                            .zip(&measured[evaluation_start..])
+                            .map(|(p, y)| (p - y).powi(2))
+                            .sum();
+                        Some((sum / per_period as f64).sqrt() / range * 100.0)
+                    }
+                    _ => None,
+                };
+                Ok(TrackingRun {
+                    label,
+                    method,
+                    command_v,
+                    measured_um: measured,
+                    indices,
+                    saturated,
+                    model_mismatch_rms_percent,
+                })
+            },
+        )
+        .collect::<Result<_, _>>()?;
+    observer.advance(job_count);
     observer.end();
 
     // 4. The noise floor: the uncompensated and the exact IHC commands again, with other
@@ -691,7 +762,7 @@ pub fn run_study(
     for (k, (label, change, config)) in variants.into_iter().enumerate() {
         let changed = config != options.stage;
         let mut stage = Stage::new(&config, options.seed)?;
-        let response = stage.run(&record.command_v);
+        let response = stage.run(&record.command_v[..record.hysteresis_samples]);
         let y: Vec<f64> = response
             .measured_position_um
             .iter()
@@ -710,7 +781,7 @@ pub fn run_study(
             }
         })?;
         let run_label = format!("{label} / ihc");
-        let (command_v, _) = drive(&plant, Method::Ihc, &desired, full_scale, &run_label)?;
+        let (command_v, _) = drive(&plant.model, Method::Ihc, &desired, full_scale, &run_label)?;
         let measured = track(&config, tracking_seed, &command_v)?;
         let ihc = evaluate(
             &desired,
@@ -730,10 +801,44 @@ pub fn run_study(
     }
     observer.end();
 
+    // 6. Beyond the paper: how long and how fast (the duration and speed studies).
+    // The exact WIHC solves the same equation as the exact IHC (P[v] = y_d, eqs. (5) and
+    // (9)): its drive is IHC's to rounding (the tracking runs above show both), so the long
+    // runs repeat only IHC and DIHC.
+    let approaches = |ihc_only: bool| {
+        let mut list = vec![
+            Approach::uncompensated(gain),
+            Approach::model(EXACT_IHC_LABEL, &exact_plant.model, Method::Ihc),
+            Approach::model(FULL_IHC_LABEL, &full_plant.model, Method::Ihc),
+        ];
+        if !ihc_only {
+            list.push(Approach::model(
+                "full / dihc",
+                &full_inverse.model,
+                Method::Dihc,
+            ));
+        }
+        list
+    };
+    observer.begin("duration", 1);
+    let duration = run_duration(
+        &options.stage,
+        tracking_seed,
+        &approaches(false),
+        full_scale,
+        options.mhe_bins,
+    )?;
+    observer.end();
+    observer.begin("speed", 1);
+    let speed = run_speed(&options.stage, tracking_seed, &approaches(true), full_scale)?;
+    observer.end();
+
+    let record_s = record.command_v.len() as f64 / fs;
     let mut runs = runs.into_iter();
-    let uncompensated = runs.next().expect("11 runs");
+    let uncompensated = runs.next().expect("14 runs");
     let paper_runs: Vec<TrackingRun> = runs.by_ref().take(3).collect();
     let exact_runs: Vec<TrackingRun> = runs.by_ref().take(3).collect();
+    let full_runs: Vec<TrackingRun> = runs.by_ref().take(3).collect();
     let cross_runs: Vec<TrackingRun> = runs.collect();
     Ok(Study {
         options: options.clone(),
@@ -768,6 +873,15 @@ pub fn run_study(
                 convergence: [Vec::new(), Vec::new()],
             },
         ],
+        full: FullPipeline {
+            plant: full_plant,
+            inverse: full_inverse,
+            runs: full_runs,
+            identification_s: full_identification_s,
+            record_s,
+        },
+        duration,
+        speed,
         cross_runs,
         noise_floor: floor,
         ablations,
@@ -777,14 +891,59 @@ pub fn run_study(
 }
 
 /// The label of the exact pipeline's IHC run, which the noise floor and the ablations repeat.
-const EXACT_IHC_LABEL: &str = "exact / ihc";
+pub(crate) const EXACT_IHC_LABEL: &str = "exact / ihc";
+
+/// The label of the full pipeline's IHC run.
+pub(crate) const FULL_IHC_LABEL: &str = "full / ihc";
+
+/// What drives the stage in the duration and speed studies: the linear feedforward gain, or a
+/// compensator from a model file.
+#[derive(Debug, Clone)]
+pub(crate) struct Approach<'a> {
+    /// E.g. `exact / ihc`.
+    pub label: String,
+    /// The model and the method, or `None` for the linear gain.
+    pub model: Option<(&'a ModelFile, Method)>,
+    /// The linear gain, V/um (uncompensated).
+    pub gain: f64,
+}
+
+impl<'a> Approach<'a> {
+    pub(crate) fn uncompensated(gain: f64) -> Self {
+        Approach {
+            label: "uncompensated".into(),
+            model: None,
+            gain,
+        }
+    }
+
+    pub(crate) fn model(label: &str, model: &'a ModelFile, method: Method) -> Self {
+        Approach {
+            label: label.into(),
+            model: Some((model, method)),
+            gain: 0.0,
+        }
+    }
+
+    /// The command for `desired`, and the samples the compensator clamped.
+    pub(crate) fn command(
+        &self,
+        desired: &[f64],
+        full_scale: f64,
+    ) -> Result<(Vec<f64>, u64), StudyError> {
+        match self.model {
+            Some((model, method)) => drive(model, method, desired, full_scale, &self.label),
+            None => Ok((desired.iter().map(|y| y * self.gain).collect(), 0)),
+        }
+    }
+}
 
 /// The most trajectory periods the study tracks.
 pub const MAX_STUDY_PERIODS: usize = 20;
 
-/// Stage runs of the trajectory in one study: 11 tracking runs, the noise floor's replays and
+/// Stage runs of the trajectory in one study: 14 tracking runs, the noise floor's replays and
 /// the ablations.
-pub const TRACKING_RUNS: usize = 11 + 2 * NOISE_FLOOR_EXTRA_SEEDS as usize + 4;
+pub const TRACKING_RUNS: usize = 14 + 2 * NOISE_FLOOR_EXTRA_SEEDS as usize + 4;
 
 /// Extra sensor-noise seeds of the noise floor.
 pub const NOISE_FLOOR_EXTRA_SEEDS: u64 = 4;
@@ -837,8 +996,8 @@ pub fn ablation_variants(stage: &StageConfig) -> Vec<(&'static str, String, Stag
 }
 
 /// The command `method` sends for `desired` with `model`, and the samples it clamped.
-fn drive(
-    model: &Identification,
+pub(crate) fn drive(
+    model: &ModelFile,
     method: Method,
     desired: &[f64],
     full_scale: f64,
@@ -848,8 +1007,7 @@ fn drive(
         run: label.to_string(),
         error,
     };
-    let mut c =
-        ScaledCompensator::new(&model.model, method, Some((0.0, full_scale))).map_err(error)?;
+    let mut c = ScaledCompensator::new(model, method, Some((0.0, full_scale))).map_err(error)?;
     let mut out = vec![0.0; desired.len()];
     c.process(desired, &mut out).map_err(error)?;
     // Unreachable positions, and reachable ones where a delayed loop hit a limit (ringing).
@@ -858,12 +1016,16 @@ fn drive(
 }
 
 /// The measured position of a fresh stage driven by `command_v`, um.
-fn track(stage: &StageConfig, seed: u64, command_v: &[f64]) -> Result<Vec<f64>, StudyError> {
+pub(crate) fn track(
+    stage: &StageConfig,
+    seed: u64,
+    command_v: &[f64],
+) -> Result<Vec<f64>, StudyError> {
     Ok(Stage::new(stage, seed)?.run(command_v).measured_position_um)
 }
 
 /// The indices of a run on the evaluation window.
-fn evaluate(
+pub(crate) fn evaluate(
     desired: &[f64],
     measured: &[f64],
     start: usize,

@@ -51,6 +51,9 @@ pub struct StudySummary {
     /// The CSV files beside `study.json` holding every series the figures show (written by
     /// [`write_outputs`]; empty in a summary that was only computed).
     pub series: Vec<SeriesFile>,
+    /// Beyond the paper: the `full` pipeline, the duration and speed studies and issue 11's
+    /// targets ([`crate::beyond`]).
+    pub beyond: crate::beyond::BeyondSummary,
 }
 
 /// A CSV file of the report's directory with series the figures show, to replot them.
@@ -250,6 +253,7 @@ pub fn summarize(study: &Study) -> StudySummary {
         identification_warmup_samples: 0,
         identification_holdout: 0.0,
         series: Vec::new(),
+        beyond: crate::beyond::summarize_beyond(study),
     }
 }
 
@@ -353,7 +357,7 @@ impl fmt::Display for StudySummary {
                 a.label, a.ihc.e_mhe_percent, a.ihc.e_rms_percent
             )?;
         }
-        Ok(())
+        write!(f, "{}", self.beyond)
     }
 }
 
@@ -1448,6 +1452,16 @@ pub fn write_outputs(
                 .map_err(|e| OutputError::Io(e.to_string()))?;
             models.push(path);
         }
+    }
+    for (kind, id) in [
+        ("plant", &study.full.plant),
+        ("inverse", &study.full.inverse),
+    ] {
+        let path = models_dir.join(format!("full-{kind}.json"));
+        id.model
+            .save(&path)
+            .map_err(|e| OutputError::Io(e.to_string()))?;
+        models.push(path);
     }
 
     // The series the figures show, as CSV beside study.json.

@@ -6,6 +6,9 @@ mod common;
 use common::*;
 use hystcomp_experiments::study::Silent;
 use hystcomp_experiments::{RunMeta, StudyOptions, run_study, summarize, write_outputs};
+
+#[path = "study/beyond.rs"]
+mod beyond;
 use hystcomp_io::model_file::ModelFile;
 
 /// The HTML of the table with the given id.
@@ -28,6 +31,9 @@ fn meta() -> RunMeta {
 fn default_study_meets_the_acceptance_bounds_and_writes_a_report_chromium_shows() {
     let study = run_study(&StudyOptions::default(), &mut Silent).unwrap();
     let summary = summarize(&study);
+    beyond::the_full_pipeline_and_the_duration_and_speed_studies_measure_what_they_claim(
+        &study, &summary,
+    );
     // Acceptance on the default stage: the exact pipeline cuts e_mhe from about 13 % to <= 3 %
     // with e_rms <= 0.75 %.
     let exact = study.pipeline("exact").unwrap();
@@ -122,6 +128,7 @@ fn default_study_meets_the_acceptance_bounds_and_writes_a_report_chromium_shows(
     assert_eq!(
         hystcomp_experiments::study::TRACKING_RUNS,
         1 + study.pipelines.iter().map(|p| p.runs.len()).sum::<usize>()
+            + study.full.runs.len()
             + study.cross_runs.len()
             + 2 * (floor.seeds.len() - 1)
             + study.ablations.len()

@@ -285,7 +285,15 @@ fn arx(x: &[f64], y: &[f64], d: usize, n: usize, m: usize) -> Option<Coefficient
         }
         phi[(r, p - 1)] = 1.0;
     }
-    let theta = phi.svd(true, true).solve(&target, 1e-12).ok()?;
+    // Least squares by QR (the columns are scaled alike: differences of the same signals).
+    let qr = phi.qr();
+    let r = qr.r();
+    if (0..p).any(|i| r[(i, i)].abs() <= 1e-12 * r[(0, 0)].abs()) {
+        return None;
+    }
+    let mut rhs = target;
+    qr.q_tr_mul(&mut rhs);
+    let theta = r.solve_upper_triangular(&rhs.rows(0, p).into_owned())?;
     let mut a = vec![1.0];
     a.extend(theta.iter().take(n));
     let mut b: Vec<f64> = theta.iter().skip(n).take(m - 1).copied().collect();

@@ -46,22 +46,24 @@ impl Amplifier {
         (v, clamped)
     }
 
-    /// As [`Amplifier::step`], also saying whether the output slewed at the current limit
-    /// during the sample.
+    /// As [`Amplifier::step`], also saying whether the output slewed at the current limit for
+    /// the whole sample (a staircase input makes it slew for part of many samples: that is the
+    /// first-order response's start, not a drive beyond the amplifier).
     pub(crate) fn step_limits(&mut self, input_v: f64) -> (f64, bool, bool) {
         let wanted = self.gain * input_v;
         let clamped = wanted < self.min_v || wanted > self.max_v;
         let target = wanted.clamp(self.min_v, self.max_v);
         let error = target - self.output_v;
         let linear_error = self.slew_v_per_s / self.omega;
-        let slewing = error.abs() > linear_error;
-        if !slewing {
+        let mut slewing = false;
+        if error.abs() <= linear_error {
             self.output_v = target - error * self.decay;
         } else {
             let sign = error.signum();
             let slewing_s = (error.abs() - linear_error) / self.slew_v_per_s;
             if slewing_s >= self.period_s {
                 self.output_v += sign * self.slew_v_per_s * self.period_s;
+                slewing = true;
             } else {
                 let rest_s = self.period_s - slewing_s;
                 self.output_v = target - sign * linear_error * (-self.omega * rest_s).exp();

@@ -22,7 +22,7 @@ pub struct Feasibility {
     pub peak_slew_v_per_s: f64,
     /// The amplifier's slew-rate limit, V/s.
     pub slew_limit_v_per_s: f64,
-    /// Samples during which the output slewed at the limit.
+    /// Samples during which the output slewed at the limit for the whole sample.
     pub slew_limited: usize,
     /// Samples whose amplified command lay outside the rails.
     pub rail_limited: usize,

@@ -42,8 +42,8 @@ pub struct ClampCounts {
     /// Commands whose amplified value lay outside the amplifier's rails (clamped to them).
     pub amplifier_clamped: u64,
     /// Samples during which the amplifier's output slewed at its current limit
-    /// (`peak_current / load_capacitance`): the drive asked for a faster change than the
-    /// amplifier can deliver into the stack.
+    /// (`peak_current / load_capacitance`) for the whole sample: the drive asked for a faster
+    /// change than the amplifier can deliver into the stack.
     pub slew_limited: u64,
     /// NaN or infinite commands (the DAC held its previous value).
     pub non_finite: u64,

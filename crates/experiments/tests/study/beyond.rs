@@ -1,0 +1,112 @@
+//! Issue 11 on the default stage, from the study's own run (called by the default study's
+//! test in `study.rs`, so that the study runs once): the `full` pipeline, the duration and
+//! speed studies, and the issue's figures against the bounds where they are met, against the
+//! measured values (with room for the noise) where they are not. The report and `--json`
+//! state each miss; these assertions keep the measured numbers honest.
+
+use hystcomp_experiments::study::Study;
+use hystcomp_experiments::study_report::StudySummary;
+
+fn close_to(value: f64, measured: f64, tolerance: f64, what: &str) {
+    assert!(
+        (value - measured).abs() <= tolerance,
+        "{what}: {value} (measured when written: {measured} +- {tolerance})"
+    );
+}
+
+pub fn the_full_pipeline_and_the_duration_and_speed_studies_measure_what_they_claim(
+    study: &Study,
+    summary: &StudySummary,
+) {
+    let exact = study.pipeline("exact").unwrap();
+    let full = &study.full;
+    assert_eq!(full.runs.len(), 3);
+    // The chain: creep and vibration identified, each helping the fit where it should.
+    let plant = &full.plant.report;
+    let rms: Vec<f64> = plant.contributions.iter().map(|c| c.rms_percent).collect();
+    assert_eq!(rms.len(), 3, "{:?}", plant.contributions);
+    assert!(rms[1] < 0.5 * rms[0], "creep: {rms:?}");
+    let segment: Vec<f64> = plant
+        .contributions
+        .iter()
+        .map(|c| c.segment_rms_percent.unwrap())
+        .collect();
+    assert!(segment[2] < 0.3 * segment[1], "vibration: {segment:?}");
+    let dynamics = plant.dynamics.as_ref().unwrap();
+    assert!(
+        dynamics
+            .modes
+            .iter()
+            .any(|m| (m.frequency_hz - 800.0).abs() < 20.0),
+        "the stage's 800 Hz resonance: {:?}",
+        dynamics.modes
+    );
+    // 20 s: the full IHC beats the exact one (creep), but not the 0.25 % target: the
+    // hysteresis model's mismatch alone leaves 0.27 % (the ablation).
+    let full_ihc = full.runs[0].indices.e_rms_percent;
+    assert!(full_ihc < exact.runs[0].indices.e_rms_percent);
+    close_to(full_ihc, 0.296, 0.02, "full / ihc e_rms over 20 s");
+    // 200 s: the exact IHC drifts away, the full one holds (issue 11: <= 0.30 %).
+    let series = |label: &str| {
+        study
+            .duration
+            .series
+            .iter()
+            .find(|s| s.label == label)
+            .unwrap_or_else(|| panic!("no duration series {label}"))
+    };
+    let long = |label: &str| series(label).at(200.0).unwrap().e_rms_percent;
+    assert!(long("exact / ihc") > 0.7, "{}", long("exact / ihc"));
+    assert!(long("full / ihc") <= 0.30, "{}", long("full / ihc"));
+    assert_eq!(series("full / ihc").indices.len(), 20);
+    // The held step: the full pipeline removes most of the drift, not all (target 0.1 um).
+    let hold = |label: &str| {
+        study
+            .duration
+            .hold
+            .iter()
+            .find(|h| h.label == label)
+            .unwrap()
+            .drift_um
+    };
+    assert!(hold("exact / ihc") > 1.0, "{}", hold("exact / ihc"));
+    assert!(hold("full / ihc") < 0.3 * hold("exact / ihc"));
+    close_to(hold("full / ihc"), 0.258, 0.05, "full / ihc drift");
+    // Speed: the paper's trajectory at 10x (issue 11: <= 0.35 %), better than exact's.
+    let paper10 = study
+        .speed
+        .paper
+        .iter()
+        .find(|p| p.rate_hz == 10.0)
+        .unwrap();
+    assert_eq!(paper10.amplitude_scale, 1.0);
+    let at10 = paper10.run("full / ihc").unwrap().indices.e_rms_percent;
+    assert!(at10 <= 0.35, "{at10}");
+    assert!(at10 < paper10.run("exact / ihc").unwrap().indices.e_rms_percent);
+    // The fastest trajectories are scaled down to what the amplifier can slew.
+    let fastest = study.speed.paper.last().unwrap();
+    assert!(fastest.amplitude_scale < 0.5, "{}", fastest.amplitude_scale);
+    // The 100 Hz raster: full better than exact, short of the 0.5 % target.
+    let raster = |points: &[hystcomp_experiments::speed::SpeedPoint], label: &str| {
+        points
+            .iter()
+            .find(|p| p.rate_hz == 100.0)
+            .unwrap()
+            .run(label)
+            .unwrap()
+            .indices
+            .e_rms_percent
+    };
+    let r_full = raster(&study.speed.raster_strong_amplifier, "full / ihc");
+    assert!(r_full < 0.5 * raster(&study.speed.raster_strong_amplifier, "exact / ihc"));
+    close_to(
+        r_full,
+        1.06,
+        0.15,
+        "full raster at 100 Hz, strong amplifier",
+    );
+    // Every figure of the issue is in the summary, met or not.
+    let checks = &summary.beyond.checks;
+    assert_eq!(checks.len(), 10, "{checks:?}");
+    assert_eq!(checks.iter().filter(|c| c.passed).count(), 2, "{checks:?}");
+}
