@@ -74,31 +74,94 @@ fn atomic_write_into_a_missing_directory_names_the_path() {
     assert_eq!(entries(dir.path()), Vec::<String>::new());
 }
 
+/// The environment variable that tells [`write_into_locked_directory_as_child`] which file to
+/// write (set only by the test below for the child it starts).
+#[cfg(unix)]
+const CHILD_TARGET: &str = "HYSTCOMP_ATOMIC_CHILD_TARGET";
+
+/// A write into a read-only directory fails, naming the file, and leaves the old file and
+/// nothing else. As root (CI runs as root), whom permissions do not stop, the write runs in a
+/// child process of this test binary with the privileges dropped to `nobody` by `setpriv`
+/// (util-linux), so that the failure path really runs.
 #[cfg(unix)]
 #[test]
 fn atomic_write_in_a_read_only_directory_keeps_the_old_file() {
     use std::os::unix::fs::PermissionsExt;
     let dir = dir();
+    // Others may enter the folder (the unprivileged child must reach the locked one).
+    fs::set_permissions(dir.path(), fs::Permissions::from_mode(0o755)).expect("chmod");
     let locked = dir.path().join("locked");
     fs::create_dir(&locked).expect("a directory");
     let path = locked.join("model.json");
     fs::write(&path, "old").expect("the old file");
+    fs::set_permissions(&path, fs::Permissions::from_mode(0o644)).expect("chmod");
     fs::set_permissions(&locked, fs::Permissions::from_mode(0o555)).expect("read-only");
-    // A user who may write anyway (root) cannot test this: probe first.
-    let probe = locked.join("probe");
-    let writable = fs::write(&probe, "").is_ok();
-    if writable {
-        fs::remove_file(&probe).expect("removing the probe");
-        fs::set_permissions(&locked, fs::Permissions::from_mode(0o755)).expect("restore");
-        hystcomp_testkit::skip("this user can write into read-only directories (root?)");
-        return;
-    }
-    let result = write_atomic(&path, b"new");
+
+    let message = if is_root() {
+        let setpriv = hystcomp_testkit::find_on_path("setpriv");
+        if !hystcomp_testkit::require_tool(
+            "setpriv",
+            setpriv.is_some(),
+            "apt-get install util-linux",
+        ) {
+            fs::set_permissions(&locked, fs::Permissions::from_mode(0o755)).expect("restore");
+            return;
+        }
+        let exe = std::env::current_exe().expect("this test binary");
+        let output = std::process::Command::new(setpriv.expect("found above"))
+            .args(["--reuid=65534", "--regid=65534", "--clear-groups", "--"])
+            .arg(&exe)
+            .args([
+                "--ignored",
+                "--exact",
+                "write_into_locked_directory_as_child",
+                "--nocapture",
+                "--test-threads=1",
+            ])
+            .env(CHILD_TARGET, &path)
+            .output()
+            .expect("setpriv runs");
+        let stderr = String::from_utf8_lossy(&output.stderr).into_owned();
+        let stdout = String::from_utf8_lossy(&output.stdout).into_owned();
+        assert!(
+            output.status.success() && stdout.contains("1 passed"),
+            "the unprivileged child failed: {}\n{stdout}\n{stderr}",
+            output.status
+        );
+        stderr
+    } else {
+        write_atomic(&path, b"new")
+            .expect_err("a read-only directory")
+            .to_string()
+    };
     fs::set_permissions(&locked, fs::Permissions::from_mode(0o755)).expect("restore");
-    let error = result.expect_err("a read-only directory");
-    assert!(error.to_string().contains("model.json"), "{error}");
+    assert!(message.contains("model.json"), "{message}");
+    assert!(message.contains("no permission"), "{message}");
     assert_eq!(fs::read_to_string(&path).expect("the old file"), "old");
     assert_eq!(entries(&locked), ["model.json"]);
+}
+
+/// The child of the test above: writes the file it is given (as an unprivileged user), asserts
+/// that the write failed and prints the error on stderr. Ignored, so that it runs only when the
+/// test above asks for it.
+#[cfg(unix)]
+#[test]
+#[ignore = "run by atomic_write_in_a_read_only_directory_keeps_the_old_file as nobody"]
+fn write_into_locked_directory_as_child() {
+    let target = std::env::var_os(CHILD_TARGET).expect("started by the parent test");
+    assert!(!is_root(), "the child must not run as root");
+    let error = write_atomic(std::path::Path::new(&target), b"new")
+        .expect_err("writing into a read-only directory fails");
+    eprintln!("{error}");
+}
+
+/// Whether this process runs as root (whom file permissions do not stop).
+#[cfg(unix)]
+fn is_root() -> bool {
+    use std::os::unix::fs::MetadataExt;
+    // A file this process creates is owned by its effective user.
+    let probe = tempfile::NamedTempFile::new().expect("a temporary file");
+    probe.as_file().metadata().expect("metadata").uid() == 0
 }
 
 #[cfg(unix)]
