@@ -5,9 +5,11 @@
 //! - [`data`]: measured or desired records from CSV and MATLAB Level-5 `.mat` files, with
 //!   errors a person can act on;
 //! - [`atomic`]: files written atomically (temporary file, then rename);
+//! - [`bounded`]: files read with a bound on their size, checked while reading;
 //! - [`compensator`]: a compensator built from a model file, in physical units.
 
 pub mod atomic;
+pub mod bounded;
 pub mod compensator;
 pub mod data;
 pub mod model_file;

@@ -396,6 +396,9 @@ fn count(field: &'static str, n: u32, lo: u32, hi: u32) -> Result<(), StageError
     }
 }
 
+/// The largest stage file read (1 MiB; the built-in one takes 3 KiB).
+pub const MAX_STAGE_FILE_BYTES: u64 = 1 << 20;
+
 /// The highest `sample_rate_hz` a stage file may give (1 MHz): every simulated second takes
 /// this many samples of each signal.
 pub const MAX_SAMPLE_RATE_HZ: f64 = 1e6;
@@ -412,10 +415,22 @@ impl StageConfig {
 
     /// Reads and parses a stage file (see [`StageConfig::from_toml_str`]).
     pub fn from_toml_file(path: &Path) -> Result<StageConfig, StageError> {
-        let text = std::fs::read_to_string(path).map_err(|e| StageError::Io {
+        let io = |message: String| StageError::Io {
             path: path.to_path_buf(),
-            message: e.to_string(),
-        })?;
+            message,
+        };
+        let bytes = match hystcomp_io::bounded::read_at_most(path, MAX_STAGE_FILE_BYTES)
+            .map_err(|e| io(e.to_string()))?
+        {
+            hystcomp_io::bounded::Bounded::Whole(bytes) => bytes,
+            hystcomp_io::bounded::Bounded::TooLarge => {
+                return Err(io(format!(
+                    "it is larger than the {} MiB a stage file may be (or never ends)",
+                    MAX_STAGE_FILE_BYTES >> 20
+                )));
+            }
+        };
+        let text = String::from_utf8(bytes).map_err(|e| io(format!("not UTF-8 text ({e})")))?;
         let mut config = StageConfig::from_toml_str(&text)?;
         // A model file named relative to the stage file is found beside it.
         if let (Some(file), Some(dir)) = (&config.hysteresis.mpim.model_file, path.parent()) {

@@ -25,8 +25,6 @@ pub enum DataError {
     TooLarge {
         /// The file.
         path: PathBuf,
-        /// Its size.
-        bytes: u64,
     },
     /// The file could not be written.
     Write {
@@ -259,12 +257,11 @@ impl fmt::Display for DataError {
                     _ => Ok(()),
                 }
             }
-            DataError::TooLarge { path, bytes } => write!(
+            DataError::TooLarge { path } => write!(
                 f,
-                "{} is {} MiB, larger than the {} MiB a record may be; split it, or keep the \
-                 columns and rows you need",
+                "{} is larger than the {} MiB a record may be (or never ends); split it, or \
+                 keep the columns and rows you need",
                 path.display(),
-                bytes >> 20,
                 super::MAX_FILE_BYTES >> 20
             ),
             // The source already reads "could not write PATH: reason".

@@ -447,14 +447,14 @@ pub fn read_columns(
         path: path.to_owned(),
         source,
     };
-    let size = std::fs::metadata(path).map_err(read_error)?.len();
-    if size > MAX_FILE_BYTES {
-        return Err(DataError::TooLarge {
-            path: path.to_owned(),
-            bytes: size,
-        });
-    }
-    let bytes = std::fs::read(path).map_err(read_error)?;
+    let bytes = match crate::bounded::read_at_most(path, MAX_FILE_BYTES).map_err(read_error)? {
+        crate::bounded::Bounded::Whole(bytes) => bytes,
+        crate::bounded::Bounded::TooLarge => {
+            return Err(DataError::TooLarge {
+                path: path.to_owned(),
+            });
+        }
+    };
     read_bytes(path, &bytes, columns, options)
 }
 
