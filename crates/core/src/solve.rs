@@ -64,6 +64,14 @@ pub(crate) fn increasing_cubic_root<T: Real>(
         if f_next.abs() <= tolerance * size {
             return next;
         }
+        // A Newton step from `next` (fresh slope) within the tolerance of the input's scale:
+        // the root is there even when the residual is not small against its terms (a root
+        // at 0 with a tiny or subnormal constant term, which a chord approaches only
+        // geometrically and which the bracket never closes on).
+        let slope = three * c3 * square + c1;
+        if f_next.abs() <= tolerance * next.abs().max(T::one()) * slope.abs() {
+            return next;
+        }
         if f_next < T::zero() {
             lo = next;
         } else {

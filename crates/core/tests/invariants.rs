@@ -79,11 +79,11 @@ proptest! {
         let plant = random_invertible_model(&mut rng, n);
         let limits = limits_from(&mut rng);
         let desired = desired(&mut rng, &plant, 400);
-        let subject = Subject { model: plant.clone(), limits };
+        let subject = Subject { model: plant.clone(), limits, moderate: true };
         if let Err(violation) = check_plant_compensators(&subject, &desired) {
             prop_assert!(false, "{}", violation);
         }
-        let subject32 = Subject { model: as_f32(&plant), limits: limits_f32(limits) };
+        let subject32 = Subject { model: as_f32(&plant), limits: limits_f32(limits), moderate: true };
         let desired32: Vec<f32> = desired.iter().map(|&y| y as f32).collect();
         if let Err(violation) = check_plant_compensators(&subject32, &desired32) {
             prop_assert!(false, "f32: {}", violation);
@@ -97,11 +97,11 @@ proptest! {
         let inverse = random_invertible_model(&mut rng, n);
         let limits = limits_from(&mut rng);
         let desired = desired(&mut rng, &inverse, 400);
-        let subject = Subject { model: inverse.clone(), limits };
+        let subject = Subject { model: inverse.clone(), limits, moderate: true };
         if let Err(violation) = check_dihc(&subject, 0.0, 1.0, &desired) {
             prop_assert!(false, "{}", violation);
         }
-        let subject32 = Subject { model: as_f32(&inverse), limits: limits_f32(limits) };
+        let subject32 = Subject { model: as_f32(&inverse), limits: limits_f32(limits), moderate: true };
         let desired32: Vec<f32> = desired.iter().map(|&y| y as f32).collect();
         if let Err(violation) = check_dihc(&subject32, 0.0, 1.0, &desired32) {
             prop_assert!(false, "f32: {}", violation);
@@ -151,8 +151,32 @@ fn tiny_and_subnormal_models_keep_their_invariants() {
         let subject = Subject {
             model: plant,
             limits: unit_limits(),
+            moderate: true,
         };
         check_plant_compensators(&subject, &desired)
             .unwrap_or_else(|v| panic!("factor {factor:e}: {v}"));
+    }
+}
+
+/// Found by the fuzz target `compensators`: after a clamp at the lower limit, a subnormal
+/// desired position (the root of eq. (5) at 0 with a subnormal constant term) made the exact
+/// IHC's chord iteration creep towards 0 geometrically, never closing its bracket, and end on
+/// a bisection step: a drive of 2022 where 0 was right, not counted as a clamp.
+#[test]
+fn a_subnormal_desired_position_after_a_clamp_gets_the_exact_drive() {
+    use hystcomp_core::{Compensator, Ihc, SolveMode};
+    let model = Mpim::new(&[0.0], &[0.0], 0.001454220124425284, 2732.6028137363173).unwrap();
+    let limits = OutputLimits::new(-2.1333434983772617, 4044.953690536558).unwrap();
+    for y_d in [5.8e-322, -5.8e-322, 1e-310, 0.0] {
+        let mut ihc: Ihc<f64, Vec<f64>> = Ihc::new(&model, limits, SolveMode::Exact).unwrap();
+        assert_eq!(ihc.step(-1e10), limits.min());
+        let v = ihc.step(y_d);
+        assert!(v.abs() < 1e-12, "y_d = {y_d:e}: v = {v}");
+        let subject = Subject {
+            model: model.clone(),
+            limits,
+            moderate: true,
+        };
+        check_plant_compensators(&subject, &[-1e10, y_d, -3.4e305, y_d]).unwrap();
     }
 }

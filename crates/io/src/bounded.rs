@@ -19,7 +19,10 @@ pub enum Bounded {
 /// `limit`, whatever the file reports.
 pub fn read_at_most(path: &Path, limit: u64) -> io::Result<Bounded> {
     let file = File::open(path)?;
-    if file.metadata().is_ok_and(|m| m.is_file() && m.len() > limit) {
+    if file
+        .metadata()
+        .is_ok_and(|m| m.is_file() && m.len() > limit)
+    {
         return Ok(Bounded::TooLarge);
     }
     let expected = file
@@ -51,7 +54,10 @@ mod tests {
         let dir = tempfile::tempdir().unwrap();
         let path = dir.path().join("f");
         std::fs::write(&path, [7u8; 100]).unwrap();
-        assert!(matches!(read_at_most(&path, 99).unwrap(), Bounded::TooLarge));
+        assert!(matches!(
+            read_at_most(&path, 99).unwrap(),
+            Bounded::TooLarge
+        ));
         match read_at_most(&path, 100).unwrap() {
             Bounded::Whole(bytes) => assert_eq!(bytes, [7u8; 100]),
             Bounded::TooLarge => panic!("100 bytes fit a limit of 100"),

@@ -541,22 +541,24 @@ impl ModelFile {
             path: shown.clone(),
             source,
         };
-        let bytes = match crate::bounded::read_at_most(path, MAX_MODEL_FILE_BYTES)
-            .map_err(io_error)?
-        {
-            crate::bounded::Bounded::Whole(bytes) => bytes,
-            crate::bounded::Bounded::TooLarge => {
-                return Err(ModelFileError::Invalid {
-                    message: format!(
-                        "{shown} is larger than the {} MiB a model file may be (a model of \
+        let bytes =
+            match crate::bounded::read_at_most(path, MAX_MODEL_FILE_BYTES).map_err(io_error)? {
+                crate::bounded::Bounded::Whole(bytes) => bytes,
+                crate::bounded::Bounded::TooLarge => {
+                    return Err(ModelFileError::Invalid {
+                        message: format!(
+                            "{shown} is larger than the {} MiB a model file may be (a model of \
                          {MAX_OPERATORS} operators takes about 0.5 MiB); is it a model file?",
-                        MAX_MODEL_FILE_BYTES >> 20
-                    ),
-                });
-            }
-        };
+                            MAX_MODEL_FILE_BYTES >> 20
+                        ),
+                    });
+                }
+            };
         let text = String::from_utf8(bytes).map_err(|e| {
-            io_error(std::io::Error::new(std::io::ErrorKind::InvalidData, e.utf8_error()))
+            io_error(std::io::Error::new(
+                std::io::ErrorKind::InvalidData,
+                e.utf8_error(),
+            ))
         })?;
         Self::from_json(&text).map_err(|e| match e {
             ModelFileError::Parse { message, .. } => ModelFileError::Parse {

@@ -359,7 +359,8 @@ fn finite(field: &'static str, x: f64) -> Result<f64, StageError> {
 }
 
 fn positive(field: &'static str, x: f64) -> Result<(), StageError> {
-    if finite(field, x)? > 0.0 {
+    // A subnormal value is no physical quantity, and dividing by it overflows.
+    if finite(field, x)? > 0.0 && x.is_normal() {
         Ok(())
     } else {
         Err(StageError::invalid(field, "> 0", x))
@@ -377,12 +378,14 @@ fn within(field: &'static str, x: f64, lo: f64, hi: f64, text: &str) -> Result<(
 fn ordered(field: &'static str, lo: f64, hi: f64) -> Result<(), StageError> {
     finite(field, lo)?;
     finite(field, hi)?;
-    if lo < hi {
+    // The span must be a normal number: a subnormal one divides to infinity, an infinite one
+    // (-1e308..1e308) overflows.
+    if lo < hi && (hi - lo).is_normal() {
         Ok(())
     } else {
         Err(StageError::invalid(
             field,
-            "increasing (lower limit below upper limit)",
+            "increasing (lower limit below upper limit), with a span of ordinary size",
             format!("[{lo}, {hi}]"),
         ))
     }
@@ -473,6 +476,9 @@ impl StageConfig {
             count(bits, c.bits, 1, 32)?;
             ordered(span, c.min_v, c.max_v)?;
         }
+
+        // The ADC's top is the sensor's full scale (the nonlinearity is a fraction of it).
+        positive("adc.max_v", self.adc.max_v)?;
 
         let a = &self.amplifier;
         positive("amplifier.gain", a.gain)?;

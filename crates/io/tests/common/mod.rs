@@ -2,6 +2,7 @@
 #![allow(dead_code)]
 
 pub mod mat5;
+pub mod properties;
 
 use std::fs;
 use std::path::{Path, PathBuf};
