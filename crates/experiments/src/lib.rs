@@ -15,6 +15,7 @@ pub mod duration;
 pub mod excitation;
 pub mod figures;
 pub mod full;
+pub mod learning;
 pub mod reference;
 pub mod report;
 pub mod signals;

@@ -1,0 +1,151 @@
+//! Learning from repetition on the simulated stage: the trial loop ([`run_trials`]) that
+//! `hystcomp learn --simulate`, the learning study of `hystcomp reproduce` and the acceptance
+//! tests share. The learning law itself is `hystcomp-learn`'s; this module only plays drives
+//! on the stage and hands the measurements back.
+//!
+//! A trial starts from rest (a fresh stage: relaxed, at 0 V), as iterative learning control
+//! assumes (every trial from the same state; Bristow, Tharayil & Alleyne 2006,
+//! doi:10.1109/MCS.2006.1636313). A periodic learner's drive (one period) is played
+//! `periods` times and the last period is measured, so that the start from rest is over and
+//! the creep since it is the same in every trial; a finite one is played once. Each trial has
+//! its own sensor-noise seed (`seed + trial`): noise does not repeat, and learning must not
+//! learn it.
+
+use hystcomp_learn::{LearnError, Learner, Update};
+use hystcomp_stage::{ClampCounts, Stage, StageConfig, StageError};
+use serde::Serialize;
+
+/// The most periods one simulated trial plays.
+pub const MAX_PERIODS_PER_TRIAL: usize = 1000;
+/// The most trials one simulated run makes.
+pub const MAX_TRIALS: usize = 1000;
+/// The most stage samples one simulated run may play in all (1e9: about two minutes of
+/// simulation on this project's machine).
+pub const MAX_SIMULATED_SAMPLES: f64 = 1e9;
+
+/// Why the simulated loop stopped early.
+#[derive(Debug)]
+pub enum TrialError {
+    /// The stage.
+    Stage(StageError),
+    /// The learner.
+    Learn(LearnError),
+    /// An option out of range.
+    Option(String),
+}
+
+impl std::fmt::Display for TrialError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            TrialError::Stage(e) => write!(f, "stage: {e}"),
+            TrialError::Learn(e) => write!(f, "{e}"),
+            TrialError::Option(m) => f.write_str(m),
+        }
+    }
+}
+
+impl std::error::Error for TrialError {}
+
+impl From<StageError> for TrialError {
+    fn from(e: StageError) -> Self {
+        TrialError::Stage(e)
+    }
+}
+
+impl From<LearnError> for TrialError {
+    fn from(e: LearnError) -> Self {
+        TrialError::Learn(e)
+    }
+}
+
+/// One simulated trial.
+#[derive(Debug, Clone, Serialize)]
+pub struct SimulatedTrial {
+    /// The learner's report of it.
+    pub update: Update,
+    /// RMS of the sensor noise alone over the measured period (measured minus true position),
+    /// % of the desired range: the floor no learning goes below.
+    pub noise_floor_percent: f64,
+    /// What the stage clamped or slewed in this trial.
+    #[serde(skip)]
+    pub clamps: ClampCounts,
+    /// Samples during which the amplifier slewed at its current limit.
+    pub slew_limited: u64,
+}
+
+/// Checks `trials` and `periods` against the bounds before anything runs.
+pub fn check_trials(trials: usize, periods: usize, samples: usize) -> Result<(), TrialError> {
+    if !(1..=MAX_TRIALS).contains(&trials) {
+        return Err(TrialError::Option(format!(
+            "--trials {trials}: give 1 to {MAX_TRIALS}"
+        )));
+    }
+    if !(1..=MAX_PERIODS_PER_TRIAL).contains(&periods) {
+        return Err(TrialError::Option(format!(
+            "--periods {periods}: give 1 to {MAX_PERIODS_PER_TRIAL}"
+        )));
+    }
+    let total = trials as f64 * periods as f64 * samples as f64;
+    if total > MAX_SIMULATED_SAMPLES {
+        return Err(TrialError::Option(format!(
+            "{trials} trials of {periods} periods of {samples} samples are {total:.3e} stage \
+             samples, more than the {MAX_SIMULATED_SAMPLES:.0e} one run simulates; lower \
+             --trials or --periods"
+        )));
+    }
+    Ok(())
+}
+
+/// Runs `trials` trials of `learner` on `stage` (see the [module documentation](self));
+/// `watch` sees each trial as it ends. Stops early, without error, when the divergence guard
+/// trips (the last trial's status says so; the learner's drive is then the last good one).
+pub fn run_trials(
+    stage: &StageConfig,
+    seed: u64,
+    learner: &mut Learner,
+    trials: usize,
+    periods: usize,
+    watch: &mut dyn FnMut(&SimulatedTrial),
+) -> Result<Vec<SimulatedTrial>, TrialError> {
+    let n = learner.desired().len();
+    let periodic = learner.options().periodic;
+    let periods = if periodic { periods } else { 1 };
+    check_trials(trials, periods, n)?;
+    let (lo, hi) = learner
+        .desired()
+        .iter()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &y| {
+            (a.min(y), b.max(y))
+        });
+    let mut out = Vec::with_capacity(trials);
+    for trial in 0..trials {
+        let drive: Vec<f64> = (0..periods)
+            .flat_map(|_| learner.drive().iter().copied())
+            .collect();
+        let response = Stage::new(stage, seed.wrapping_add(trial as u64))?.run(&drive);
+        let start = drive.len() - n;
+        let measured = &response.measured_position_um[start..];
+        let truth = &response.true_position_um[start..];
+        let noise = (measured
+            .iter()
+            .zip(truth)
+            .map(|(m, t)| (m - t).powi(2))
+            .sum::<f64>()
+            / n as f64)
+            .sqrt();
+        let update = learner.update(measured)?;
+        let record = SimulatedTrial {
+            update,
+            noise_floor_percent: noise / (hi - lo) * 100.0,
+            clamps: response.clamps,
+            slew_limited: response.clamps.slew_limited,
+        };
+        watch(&record);
+        let stopped = learner.is_stopped();
+        out.push(record);
+        if stopped {
+            break;
+        }
+    }
+    Ok(out)
+}
