@@ -758,7 +758,7 @@ fn option_values_are_named_in_their_messages() {
     refuses(
         &m,
         &with(&["--voltage-factor", "1e308"]),
-        &["--voltage-factor", "overflows"],
+        &["--voltage-factor", "beyond 1e15"],
     );
     refuses(&m, &with(&["--max-condition", "1.5"]), &["limit 1.5)"]);
     refuses(

@@ -343,8 +343,9 @@ impl Study {
 pub const MAX_STUDY_RUN_SAMPLES: usize = 5_000_000;
 
 /// Refuses a stage rate and study length whose runs exceed [`MAX_STUDY_RUN_SAMPLES`], before
-/// anything is allocated.
-fn check_run_lengths(options: &StudyOptions) -> Result<(), StudyError> {
+/// anything is allocated ([`run_study`] calls it; callers may call it first to say which
+/// stage file is at fault).
+pub fn check_run_lengths(options: &StudyOptions) -> Result<(), StudyError> {
     let fs = options.stage.sample_rate_hz;
     let period_s = Reference::paper().trajectory.period_s;
     for (what, duration_s) in [

@@ -316,10 +316,16 @@ pub fn load(
             columns.displacement_factor,
         ),
     ] {
-        if let Some(v) = column.iter().find(|v| !(*v * factor).is_finite()) {
+        let bound = data::MAX_MAGNITUDE;
+        if let Some(v) = column
+            .iter()
+            .find(|v| (*v * factor).is_nan() || (*v * factor).abs() > bound)
+        {
             return Err(CliError::input(format!(
-                "{what} {factor} is too large: {v} times it overflows; give a factor that \
-                 keeps the scaled values finite"
+                "{what} {factor:e} is too large: {v} times it is {:e}, beyond {bound:e} in \
+                 magnitude (the largest a record may hold, so that fits and indices stay \
+                 finite); give a factor that keeps the scaled values within it",
+                v * factor
             )));
         }
     }

@@ -146,6 +146,15 @@ pub fn run(args: &Args, ctx: Context) -> Result<(), CliError> {
     };
     options.pso.iterations = args.pso_iterations;
     options.pso.particles = args.pso_particles;
+    // The stage's rate decides how long the study's runs are: refused before anything is
+    // simulated, naming the stage file.
+    hystcomp_experiments::study::check_run_lengths(&options).map_err(|e| {
+        let error = CliError::input(e.to_string());
+        match &args.stage {
+            Some(path) => error.context(path.display()),
+            None => error,
+        }
+    })?;
     let mut bars = Bars { bar: None };
     let study = run_study(&options, &mut bars)?;
     let meta = RunMeta {
