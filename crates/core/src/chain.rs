@@ -124,6 +124,15 @@ impl<T: Real, C: Buffer<T>, H: Compensator<T>> ChainCompensator<T, C, H> {
         self.creep.as_ref()
     }
 
+    /// Takes the creep link as having rested long at the displacement `desired` (its elements
+    /// settled there) instead of relaxed at its origin: for a record that starts in the middle
+    /// of a history, as most measured records do. The other links are untouched.
+    pub fn settle_creep(&mut self, desired: T) {
+        if let Some(c) = &mut self.creep {
+            c.settle(desired);
+        }
+    }
+
     /// The whole known trajectory at once: `control[k]` for `desired[k]` without the lag (the
     /// trajectory is held at its last value for the preview's `p` samples after its end).
     /// Resets first; refuses slices of different lengths.

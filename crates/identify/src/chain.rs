@@ -117,6 +117,9 @@ pub struct ChainOptions {
     pub creep: Option<CreepOptions>,
     /// The vibration link, if any.
     pub dynamics: Option<DynamicsOptions>,
+    /// Output-error refinements of the joint hysteresis-and-creep fit at most (see
+    /// [`identify_chain`]; 0 keeps the equation-error fit).
+    pub output_error_iterations: usize,
 }
 
 impl ChainOptions {
@@ -233,6 +236,29 @@ pub fn identify_chain(
     Ok(ChainIdentification { model, report })
 }
 
+/// The pure delay (samples of the full rate, up to `max_delay`) that lets the hysteresis alone
+/// fit the decimated displacement `y` best from the delayed voltage.
+fn record_delay(
+    voltage: &[f64],
+    y: &[f64],
+    options: &IdentifyOptions,
+    decimation: usize,
+    max_delay: usize,
+) -> Result<usize, IdentifyError> {
+    let mut best = (0, f64::INFINITY);
+    for d in 0..=max_delay {
+        let v: Vec<f64> = (0..voltage.len())
+            .step_by(decimation)
+            .map(|i| voltage[i.saturating_sub(d)])
+            .collect();
+        let rms = identify(&v, y, options)?.report.fit.rms_percent;
+        if rms < best.1 {
+            best = (d, rms);
+        }
+    }
+    Ok(best.0)
+}
+
 /// Where the hysteresis and creep fit ends: at the vibration segment when it lies in the
 /// second half of the record (its fast content, decimated, would alias into their fit), else
 /// at the record's end.
@@ -299,15 +325,32 @@ fn plant_chain(
 ) -> Result<Plant, IdentifyError> {
     let k = chain.decimation;
     let end = fitted_end(chain, voltage.len());
-    let v = decimate(&voltage[..end], k);
     let y = decimate(&displacement[..end], k);
+    // With a vibration link, the record's pure delay first: the hysteresis and creep are
+    // fitted on the voltage it delays, so that a lag does not pass for creep (the vibration
+    // link takes the delay back).
+    let delay = match &chain.dynamics {
+        Some(d) => record_delay(&voltage[..end], &y, options, k, d.max_delay_samples)?,
+        None => 0,
+    };
+    let delayed: Vec<f64> = (0..end).map(|i| voltage[i.saturating_sub(delay)]).collect();
+    let v = decimate(&delayed, k);
     let base: Identification = identify(&v, &y, options)?;
     let rate = chain.sample_rate_hz;
-    let (mut model, creep_fit, hysteresis_report) = match &chain.creep {
+    let (mut model, creep_fit, mut hysteresis_report) = match &chain.creep {
         None => (base.model.clone(), None, base.report.clone()),
         Some(creep) => {
-            let (model, fit, report) =
-                joint_creep_fit(&v, &displacement[..end], options, &base, creep, rate, k)?;
+            let (model, fit, report) = joint_creep_fit(
+                &v,
+                &delayed,
+                &displacement[..end],
+                options,
+                &base,
+                creep,
+                rate,
+                k,
+                chain.output_error_iterations,
+            )?;
             (model, Some(fit), report)
         }
     };
@@ -325,8 +368,13 @@ fn plant_chain(
     }
     // Contributions: the hysteresis alone, with creep, with vibration.
     let mut contributions = Vec::new();
-    let mut add = |name: &str, file: &ModelFile| -> Result<(), IdentifyError> {
-        let predicted = file.predict(voltage)?;
+    // The hysteresis and creep links alone run on the delayed voltage (the vibration link holds
+    // the delay).
+    let delayed_full: Vec<f64> = (0..voltage.len())
+        .map(|i| voltage[i.saturating_sub(delay)])
+        .collect();
+    let mut add = |name: &str, file: &ModelFile, input: &[f64]| -> Result<(), IdentifyError> {
+        let predicted = file.predict(input)?;
         let rms = |range: std::ops::Range<usize>| {
             ErrorStats::new(&predicted[range.clone()], &displacement[range], y_scale)
                 .map(|s| s.rms_percent)
@@ -339,13 +387,22 @@ fn plant_chain(
         });
         Ok(())
     };
-    add("hysteresis", &base.model)?;
+    add("hysteresis", &base.model, &delayed_full)?;
     if creep_fit.is_some() {
         let creep_only = model.clone().with_links(rate, model.creep.clone(), None)?;
-        add("+ creep", &creep_only)?;
+        add("+ creep", &creep_only, &delayed_full)?;
+        // The joint fit's own errors (hysteresis and creep), fitted and held-out samples.
+        let predicted = creep_only.predict(&delayed_full)?;
+        let stats = |range: std::ops::Range<usize>| {
+            ErrorStats::new(&predicted[range.clone()], &displacement[range], y_scale)
+        };
+        if let Some(fit) = stats(span.clone()) {
+            hysteresis_report.fit = fit;
+        }
+        hysteresis_report.holdout = stats(span.end..end);
     }
     if dynamics_fit.is_some() {
-        add("+ vibration", &model)?;
+        add("+ vibration", &model, voltage)?;
     }
     let predicted = model.predict(voltage)?;
     let fit = ErrorStats::new(&predicted[span.clone()], &displacement[span], y_scale).ok_or_else(
@@ -379,13 +436,95 @@ fn plant_chain(
     })
 }
 
+/// The default number of output-error refinements of the joint fit at most.
+pub const OUTPUT_ERROR_ITERATIONS: usize = 4;
+
 /// Step 2 of the module documentation, on the decimated voltage `v` and the full-rate
-/// displacement `displacement` (the creep elements filter it at the full rate, the rate the
+/// record (`voltage`, `displacement`; the creep elements filter at the full rate, the rate the
 /// model's link runs at, and are then decimated), with the normalisation and fitted span of
 /// the hysteresis-only fit `base`.
+///
+/// The equation-error fit filters the measured displacement. It is then refined towards the
+/// output error (as Steiglitz and McBride refine a transfer function): the elements filter the
+/// displacement the current model simulates from the voltage instead, and the joint fit is
+/// solved again, as long as the simulated model's RMS error over the fitted samples falls
+/// (at most `iterations` times). On records where a lag or sensor drift lets
+/// the equation error buy its fit with large creep weights (the forward link then amplifies
+/// the model's errors), the simulated error decides.
+#[allow(clippy::too_many_arguments)]
 fn joint_creep_fit(
     v: &[f64],
+    voltage: &[f64],
     displacement: &[f64],
+    options: &IdentifyOptions,
+    base: &Identification,
+    creep: &CreepOptions,
+    rate: f64,
+    decimation: usize,
+    iterations: usize,
+) -> Result<(ModelFile, CreepFit, FitReport), IdentifyError> {
+    let report = &base.report;
+    let (y_ref, y_scale) = (report.output.min, report.output.max - report.output.min);
+    let span = full_rate_span(report, decimation, voltage.len());
+    let simulated_rms = |file: &ModelFile| -> Result<f64, IdentifyError> {
+        let predicted = file.predict(voltage)?;
+        Ok(ErrorStats::new(
+            &predicted[span.clone()],
+            &displacement[span.clone()],
+            y_scale,
+        )
+        .map_or(f64::INFINITY, |s| s.rms_percent))
+    };
+    let normalised =
+        |values: &[f64]| -> Vec<f64> { values.iter().map(|y| (y - y_ref) / y_scale).collect() };
+    let mut best = joint_creep_solve(
+        v,
+        displacement,
+        &normalised(displacement),
+        options,
+        base,
+        creep,
+        rate,
+        decimation,
+    )?;
+    let mut best_rms = simulated_rms(&best.0)?;
+    let mut refinements = 0;
+    for _ in 0..iterations {
+        let simulated = best.0.predict(voltage)?;
+        let Ok(next) = joint_creep_solve(
+            v,
+            displacement,
+            &normalised(&simulated),
+            options,
+            base,
+            creep,
+            rate,
+            decimation,
+        ) else {
+            break;
+        };
+        let rms = simulated_rms(&next.0)?;
+        if rms.is_nan() || rms >= best_rms {
+            break;
+        }
+        best = next;
+        best_rms = rms;
+        refinements += 1;
+    }
+    best.2.detail = format!(
+        "{}; {refinements} output-error refinement(s)",
+        best.2.detail
+    );
+    Ok(best)
+}
+
+/// One joint least-squares fit, the creep elements filtering `source` (normalised, full
+/// rate): the measured displacement, or the model's simulation of it.
+#[allow(clippy::too_many_arguments)]
+fn joint_creep_solve(
+    v: &[f64],
+    displacement: &[f64],
+    source: &[f64],
     options: &IdentifyOptions,
     base: &Identification,
     creep: &CreepOptions,
@@ -406,8 +545,8 @@ fn joint_creep_fit(
         .iter()
         .map(|tau| {
             let g = 1.0 - (-period / tau).exp();
-            let mut z = full[0];
-            let filtered: Vec<f64> = full
+            let mut z = source[0];
+            let filtered: Vec<f64> = source
                 .iter()
                 .map(|&value| {
                     z += g * (value - z);
@@ -507,13 +646,24 @@ fn inverse_chain(
 ) -> Result<(ModelFile, ChainReport), IdentifyError> {
     let k = chain.decimation;
     let rate = chain.sample_rate_hz;
-    // The creep-free displacement C^-1[y], creep relaxed at the record's start.
+    // The displacement advanced by the vibration link's pure delay (its fast dynamics are left
+    // alone: inverting them would amplify the sensor noise the inverse model reads), then
+    // creep-free, C^-1[y], creep relaxed at the record's start.
+    let delay = plant
+        .model
+        .vibration
+        .as_ref()
+        .map_or(0, |v| v.delay_samples);
+    let n = displacement.len();
+    let advanced: Vec<f64> = (0..n)
+        .map(|i| displacement[(i + delay).min(n - 1)])
+        .collect();
     let creep_free: Vec<f64> = match &plant.model.creep {
         Some(c) => {
             let mut inverse = c.link(rate)?.inverse();
-            displacement.iter().map(|y| inverse.step(*y)).collect()
+            advanced.iter().map(|y| inverse.step(*y)).collect()
         }
-        None => displacement.to_vec(),
+        None => advanced,
     };
     let v = decimate(voltage, k);
     let h = decimate(&creep_free, k);

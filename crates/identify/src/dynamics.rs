@@ -11,9 +11,10 @@
 //!    `1 / A` and the equation-error fit repeated, which removes the bias the sensor noise gives
 //!    ARX (K. Steiglitz, L. E. McBride, "A technique for the identification of linear systems",
 //!    IEEE Trans. Autom. Control 10 (1965) 461-464, doi:10.1109/TAC.1965.1098181).
-//! 3. **Order chosen from data**: the delay `d` first (a one-resonance model at each delay up
-//!    to the limit), then the denominator order (one resonance, a resonance and a real pole, two
-//!    resonances, ... up to the limit) and the numerator's, each scored by the simulated
+//! 3. **Order chosen from data**: the delay `d` first (a pure delay and a one-resonance model at
+//!    each delay up to the limit), then the denominator order (none: a pure delay; a real pole;
+//!    one resonance; a resonance and a real pole; two resonances; ... up to the limit) and the
+//!    numerator's, each scored by the simulated
 //!    output's RMS error on the last 30 % of the segment after fitting on the first 70 %; the
 //!    smallest model within 2 % of the best score (or within 0.1 % of the error without the
 //!    link) wins and is refitted on the whole segment.
@@ -153,20 +154,25 @@ pub fn fit_dynamics(
         candidates.push((d, n, m, rms));
         Some(rms)
     };
-    // The delay, with one resonance.
+    // The delay, with a pure delay or one resonance.
     let mut best_delay = (0, f64::INFINITY);
     for d in 0..=options.max_delay_samples {
-        if let Some(rms) = score(d, 2, 3, &mut candidates) {
-            if rms < best_delay.1 {
-                best_delay = (d, rms);
+        for (n, m) in [(0, 1), (2, 3)] {
+            if let Some(rms) = score(d, n, m, &mut candidates) {
+                if rms < best_delay.1 {
+                    best_delay = (d, rms);
+                }
             }
         }
     }
     let d = best_delay.0;
-    // The orders, with that delay.
+    // The orders, with that delay: a pure delay, a real pole, then resonances.
     let mut scored: Vec<(usize, usize, f64)> = Vec::new();
-    for n in 2..=(2 * options.max_resonances + 1) {
-        for m in [n, n + 1] {
+    for n in 0..=(2 * options.max_resonances + 1) {
+        for m in [n.max(1), n + 1] {
+            if n == 0 && m == 1 && scored.iter().any(|s| s.0 == 0) {
+                continue;
+            }
             if let Some(rms) = score(d, n, m, &mut candidates) {
                 scored.push((n, m, rms));
             }

@@ -67,6 +67,7 @@
 #![warn(missing_docs)]
 
 pub mod chain;
+mod chain_crossval;
 pub mod crossval;
 pub mod dynamics;
 mod error;
@@ -82,6 +83,7 @@ pub use chain::{
     ChainIdentification, ChainOptions, ChainReport, Contribution, CreepFit, CreepOptions,
     identify_chain, identify_inverse_chain,
 };
+pub use chain_crossval::{ChainCrossValidation, crossval_chain};
 pub use crossval::{
     CrossValidation, CrossvalOptions, CrossvalReport, Record, Replay, Validation, crossval,
     validate_models,

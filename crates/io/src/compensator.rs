@@ -156,13 +156,38 @@ impl From<CoreError> for CompensatorError {
     }
 }
 
+/// Any of the paper's compensators, behind `dyn`.
+type Hysteresis = Box<dyn Compensator<f64> + Send>;
+
+/// The hysteresis compensator alone, or the chain around it.
+enum Inner {
+    Plain(Hysteresis),
+    Chain(Box<ChainCompensator<f64, Vec<f64>, Hysteresis>>),
+}
+
+impl Inner {
+    fn get(&self) -> &dyn Compensator<f64> {
+        match self {
+            Inner::Plain(c) => c.as_ref(),
+            Inner::Chain(c) => c.as_ref(),
+        }
+    }
+
+    fn get_mut(&mut self) -> &mut dyn Compensator<f64> {
+        match self {
+            Inner::Plain(c) => c.as_mut(),
+            Inner::Chain(c) => c.as_mut(),
+        }
+    }
+}
+
 /// A compensator from a model file, in physical units.
 ///
 /// `step(desired)` takes the desired position in the model's displacement unit and returns the
 /// drive voltage in its voltage unit, always within [`ScaledCompensator::limits`], never NaN
 /// (see [`hystcomp_core::Compensator`]).
 pub struct ScaledCompensator {
-    inner: Box<dyn Compensator<f64> + Send>,
+    inner: Inner,
     method: Method,
     /// Physical meaning of the desired position (the compensator's input).
     desired: Scale,
@@ -263,7 +288,7 @@ impl ScaledCompensator {
             )?),
         };
         let mut preview_samples = 0;
-        let inner: Box<dyn Compensator<f64> + Send> = if model.has_links() {
+        let inner = if model.has_links() {
             let rate = model.sample_rate_hz.unwrap_or(1.0);
             let vibration = match &model.vibration {
                 Some(v) => {
@@ -280,9 +305,9 @@ impl ScaledCompensator {
                 Some(c) => Some(c.normalised(&desired).link(rate)?.inverse()),
                 None => None,
             };
-            Box::new(ChainCompensator::new(vibration, creep, inner))
+            Inner::Chain(Box::new(ChainCompensator::new(vibration, creep, inner)))
         } else {
-            inner
+            Inner::Plain(inner)
         };
         let desired_range = (method == Method::Dihc).then(|| {
             let (a, b) = (
@@ -301,6 +326,16 @@ impl ScaledCompensator {
             desired_range,
             preview: preview_samples,
         })
+    }
+
+    /// With a creep link: takes the stage as having rested long at the displacement
+    /// `desired_at_rest` (physical units) instead of relaxed at the creep link's origin, for a
+    /// record that starts in the middle of a history (cross-validation on a measured record).
+    /// Call after a reset and before the first sample; no effect without a creep link.
+    pub fn settle_creep(&mut self, desired_at_rest: f64) {
+        if let Inner::Chain(c) = &mut self.inner {
+            c.settle_creep(self.desired.normalise(desired_at_rest));
+        }
     }
 
     /// The vibration inverse's preview, samples (0 without a vibration link): [`step`]'s
@@ -349,7 +384,7 @@ impl ScaledCompensator {
 
     /// Back to the initial state (operators' memory zero, eq. (1)).
     pub fn reset(&mut self) {
-        self.inner.reset();
+        self.inner.get_mut().reset();
     }
 
     /// One sample: the drive for the desired position `desired` (physical units). With a
@@ -359,7 +394,7 @@ impl ScaledCompensator {
     pub fn step(&mut self, desired: f64) -> f64 {
         let v = self
             .control
-            .to_physical(self.inner.step(self.desired.normalise(desired)));
+            .to_physical(self.inner.get_mut().step(self.desired.normalise(desired)));
         // The normalised limits map onto the physical ones up to rounding; clamp once more so
         // that the physical output never leaves them, not even by an ulp.
         v.clamp(self.limits.0, self.limits.1)
@@ -403,6 +438,6 @@ impl ScaledCompensator {
     /// loop although the position was reachable) and non-finite samples since the last reset
     /// (see [`hystcomp_core::Diagnostics`]).
     pub fn diagnostics(&self) -> Diagnostics {
-        self.inner.diagnostics()
+        self.inner.get().diagnostics()
     }
 }

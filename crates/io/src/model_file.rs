@@ -647,17 +647,36 @@ impl ModelFile {
     /// inverse non-causally over the whole record (the record taken at rest at its first
     /// value before it starts and at its last after it ends).
     pub fn predict(&self, input: &[f64]) -> Result<Vec<f64>, ModelFileError> {
+        self.predict_from(input, false)
+    }
+
+    /// As [`ModelFile::predict`], the creep link taken as having rested long at the record's
+    /// start (settled at the equilibrium of its first input for a plant, at the first
+    /// displacement for an inverse model) instead of relaxed at its origin: for a measured
+    /// record that starts in the middle of a history.
+    pub fn predict_settled(&self, input: &[f64]) -> Result<Vec<f64>, ModelFileError> {
+        self.predict_from(input, true)
+    }
+
+    fn predict_from(&self, input: &[f64], settled: bool) -> Result<Vec<f64>, ModelFileError> {
         let mut model = self.model()?;
         let rate = self.sample_rate_hz.unwrap_or(1.0);
         match self.direction {
             Direction::Plant => {
                 let mut creep = self.creep.as_ref().map(|c| c.link(rate)).transpose()?;
                 let mut vibration = self.vibration.as_ref().map(|v| v.link()).transpose()?;
+                let mut first = settled;
                 Ok(input
                     .iter()
                     .map(|&x| {
                         let mut y = self.output_to_physical(model.step(self.normalise_input(x)));
                         if let Some(c) = &mut creep {
+                            if first {
+                                // At rest with input y: output origin + (y - origin) * gain.
+                                let origin = c.origin();
+                                c.settle(origin + (y - origin) * c.static_gain());
+                                first = false;
+                            }
                             y = c.step(y);
                         }
                         if let Some(d) = &mut vibration {
@@ -675,6 +694,9 @@ impl ModelFile {
                 }
                 if let Some(c) = &self.creep {
                     let mut inverse: CreepInverse<f64, Vec<f64>> = c.link(rate)?.inverse();
+                    if let (true, Some(&first)) = (settled, x.first()) {
+                        inverse.settle(first);
+                    }
                     x.iter_mut().for_each(|x| *x = inverse.step(*x));
                 }
                 Ok(x.iter()

@@ -160,3 +160,23 @@ fn the_full_compensator_inverts_the_predicted_chain() {
         assert!((late[k] - aligned[k - lag]).abs() < 1e-3, "{k}");
     }
 }
+
+#[test]
+fn a_settled_prediction_and_compensator_start_at_rest_where_the_record_starts() {
+    let file = table1().with_links(1000.0, Some(creep()), None).unwrap();
+    // Held at 6 V from the first sample: relaxed at the origin the model creeps, settled it
+    // does not.
+    let held = vec![6.0; 5000];
+    let relaxed = file.predict(&held).unwrap();
+    let settled = file.predict_settled(&held).unwrap();
+    assert!((relaxed[4999] - relaxed[0]).abs() > 0.1);
+    assert!((settled[4999] - settled[0]).abs() < 1e-9);
+    // The compensator settled at a held desired position asks a constant drive.
+    let mut c = ScaledCompensator::new(&file, Method::Ihc, None).unwrap();
+    c.settle_creep(40.0);
+    let drive: Vec<f64> = (0..3000).map(|_| c.step(40.0)).collect();
+    assert!((drive[2999] - drive[0]).abs() < 1e-9);
+    let mut relaxed = ScaledCompensator::new(&file, Method::Ihc, None).unwrap();
+    let drive: Vec<f64> = (0..3000).map(|_| relaxed.step(40.0)).collect();
+    assert!((drive[2999] - drive[0]).abs() > 1e-3);
+}

@@ -44,6 +44,15 @@ pub struct Args {
     /// was identified on). The compensator never leaves them.
     #[arg(long, value_name = "MIN:MAX", value_parser = parse_limits, allow_hyphen_values = true)]
     limits: Option<(f64, f64)>,
+    /// Stage file whose amplifier the drive is checked against before anything is driven (slew
+    /// rate into the stack's capacitance, rails, bandwidth); default: the built-in stage's.
+    #[arg(long, value_name = "FILE")]
+    stage: Option<PathBuf>,
+    /// With a vibration link: the preview of the streaming inverse, samples (the drive of
+    /// sample k uses the desired positions up to k + preview). Default: as long as the
+    /// vibration inverse needs for a negligible cut (the file is a whole known trajectory).
+    #[arg(long, value_name = "SAMPLES")]
+    preview: Option<usize>,
     /// Exit with status 0 even when the drive was clamped to its limits: because the trajectory
     /// left the reachable range, or because a delayed loop lagged or rang (the samples are
     /// counted either way, and the drive file is written).
@@ -56,6 +65,7 @@ impl NamesFiles for Args {
         Files::new()
             .input("--model", &self.model)
             .input("--desired", &self.trajectory)
+            .maybe_input("--stage", self.stage.as_ref())
             .output("--output", &self.output)
     }
 }
@@ -112,13 +122,31 @@ struct Report {
     desired_range: Option<(f64, f64)>,
     /// Smallest and largest drive emitted.
     control_range: (f64, f64),
+    /// With a vibration link: the preview of its inverse, samples (0 without).
+    preview: usize,
+    /// What the drive asks of the stage's amplifier (`--stage`, or the built-in stage's).
+    feasibility: hystcomp_stage::Feasibility,
 }
 
 /// Runs `hystcomp compensate`.
 pub fn run(args: &Args, ctx: Context) -> Result<(), CliError> {
     let model = ModelFile::load(&args.model)?;
-    let mut compensator = ScaledCompensator::new(&model, args.method, args.limits)
-        .map_err(|e| CliError::input(e.to_string()).context(args.model.display()))?;
+    if let Some(p) = args.preview {
+        crate::bounds::count(
+            "--preview",
+            p,
+            0..=hystcomp_core::MAX_PREVIEW_SAMPLES,
+            "samples",
+        )?;
+    }
+    let mut compensator =
+        ScaledCompensator::with_preview(&model, args.method, args.limits, args.preview)
+            .map_err(|e| CliError::input(e.to_string()).context(args.model.display()))?;
+    let stage = match &args.stage {
+        Some(path) => hystcomp_stage::StageConfig::from_toml_file(path)
+            .map_err(|e| CliError::input(e.to_string()).context(path.display()))?,
+        None => hystcomp_stage::StageConfig::default(),
+    };
     let options = ReadOptions {
         delimiter: args.delimiter,
         header: args.header,
@@ -132,6 +160,7 @@ pub fn run(args: &Args, ctx: Context) -> Result<(), CliError> {
     let (time, desired) = (&columns.values[0], &columns.values[1]);
     data::check_time_increasing(time)
         .map_err(|e| CliError::from(e).context(args.trajectory.display()))?;
+    check_rate(&model, time).map_err(|e| e.context(args.trajectory.display()))?;
 
     if args.method == Method::WihcDelayed
         && let Some(gain) = compensator.delayed_loop_gain().filter(|g| *g >= 1.0)
@@ -148,8 +177,24 @@ pub fn run(args: &Args, ctx: Context) -> Result<(), CliError> {
     let mut first_unreachable = None;
     let mut first_loop = None;
     let mut before = compensator.diagnostics();
-    for (k, (&d, v)) in desired.iter().zip(control.iter_mut()).enumerate() {
-        *v = compensator.step(d);
+    // With a preview the drive of sample k comes p samples later: the trajectory is fed whole,
+    // then held at its last value for p samples, and the first p drives (before it starts,
+    // the trajectory taken at rest at its first value) are dropped.
+    let p = compensator.preview();
+    let n = desired.len();
+    if n == 0 {
+        return Err(
+            CliError::input("the trajectory has no samples").context(args.trajectory.display())
+        );
+    }
+    for k in 0..n + p {
+        let d = desired[k.min(n - 1)];
+        let drive = compensator.step(d);
+        let Some(at) = k.checked_sub(p) else {
+            before = compensator.diagnostics();
+            continue;
+        };
+        control[at] = drive;
         let after = compensator.diagnostics();
         if after.non_finite > before.non_finite {
             // The drive held its previous value: never written as if it were a result.
@@ -158,16 +203,16 @@ pub fn run(args: &Args, ctx: Context) -> Result<(), CliError> {
                  model ({}); the drive would hold its previous value there. Check the \
                  trajectory's unit against the model's",
                 args.trajectory.display(),
-                columns.file_row(k + 1),
+                columns.file_row(k.min(n - 1) + 1),
                 compensator.desired_unit(),
                 args.model.display()
             )));
         }
         if after.saturated > before.saturated && first_unreachable.is_none() {
-            first_unreachable = Some(time[k]);
+            first_unreachable = Some(time[at]);
         }
         if after.loop_saturated > before.loop_saturated && first_loop.is_none() {
-            first_loop = Some(time[k]);
+            first_loop = Some(time[at]);
         }
         before = after;
     }
@@ -208,6 +253,9 @@ pub fn run(args: &Args, ctx: Context) -> Result<(), CliError> {
             .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), &v| {
                 (lo.min(v), hi.max(v))
             }),
+        preview: p,
+        feasibility: hystcomp_stage::feasibility(&stage, &control)
+            .map_err(|e| CliError::input(e.to_string()))?,
     };
     if ctx.json {
         crate::print_json(&report)?;
@@ -225,6 +273,17 @@ pub fn run(args: &Args, ctx: Context) -> Result<(), CliError> {
             report.limits.1,
             report.control_unit,
         )?;
+    }
+    if !report.feasibility.is_feasible() {
+        // Said before anything is driven: the stage would not follow this drive.
+        errln!(
+            "hystcomp: warning: the stage's amplifier cannot deliver this drive as asked ({}): \
+             {}; slow the trajectory down or reduce its amplitude",
+            args.stage
+                .as_ref()
+                .map_or("the built-in stage".to_owned(), |p| p.display().to_string()),
+            report.feasibility.summary()
+        );
     }
     let mut problems = Vec::new();
     if report.unreachable > 0 {
@@ -247,6 +306,27 @@ pub fn run(args: &Args, ctx: Context) -> Result<(), CliError> {
         );
         Err(CliError::with_code(message, EXIT_SATURATED))
     }
+}
+
+/// With creep or vibration links, the trajectory must be sampled at the model's rate (the
+/// vibration link is a discrete model at it, the creep link discretised for it).
+fn check_rate(model: &ModelFile, time: &[f64]) -> Result<(), CliError> {
+    let Some(rate) = model.sample_rate_hz.filter(|_| model.has_links()) else {
+        return Ok(());
+    };
+    if time.len() < 2 {
+        return Ok(());
+    }
+    let step = (time[time.len() - 1] - time[0]) / (time.len() - 1) as f64;
+    if ((1.0 / step) / rate - 1.0).abs() > 1e-3 {
+        return Err(CliError::input(format!(
+            "the trajectory is sampled at {} Hz but the model's creep and vibration links were \
+             identified at {} Hz; resample the trajectory at the model's rate",
+            crate::number(1.0 / step),
+            crate::number(rate)
+        )));
+    }
+    Ok(())
 }
 
 /// The message for desired positions out of the model's reach, per method.

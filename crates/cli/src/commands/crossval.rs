@@ -47,6 +47,8 @@ pub struct Args {
     pub test_warmup: String,
     #[command(flatten)]
     pub fit: FitArgs,
+    #[command(flatten)]
+    pub chain: super::chain_args::ChainArgs,
     /// Fraction of the training record held out of the fit (reported in the fit summaries).
     #[arg(
         long,
@@ -90,6 +92,11 @@ struct Output<'a> {
     report: &'a hystcomp_identify::CrossvalReport,
     plant_model: &'a hystcomp_io::model_file::ModelFile,
     inverse_model: &'a hystcomp_io::model_file::ModelFile,
+    /// The chains' reports (each link's contribution), with --model-structure creep or full.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    plant_chain: Option<&'a hystcomp_identify::ChainReport>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    inverse_chain: Option<&'a hystcomp_identify::ChainReport>,
 }
 
 /// Runs `hystcomp crossval`.
@@ -136,19 +143,36 @@ pub fn run(args: &Args, ctx: Context) -> Result<(), CliError> {
     } else {
         Bar::hidden()
     };
-    let cv = crossval(
-        Record {
-            voltage: &train.voltage,
-            displacement: &train.displacement,
-        },
-        Record {
-            voltage: &test.voltage,
-            displacement: &test.displacement,
-        },
-        &options,
-        &mut bar,
-    )
-    .map_err(|e| match e {
+    let train_record = Record {
+        voltage: &train.voltage,
+        displacement: &train.displacement,
+    };
+    let test_record = Record {
+        voltage: &test.voltage,
+        displacement: &test.displacement,
+    };
+    let chain_options = args.chain.options(c, &train)?;
+    if let (Some(chain), Some(time)) = (&chain_options, &test.time) {
+        // The vibration link is a discrete model at the training record's rate.
+        if time.len() >= 2 {
+            let step = (time[time.len() - 1] - time[0]) / (time.len() - 1) as f64;
+            if ((1.0 / step) / chain.sample_rate_hz - 1.0).abs() > 1e-3 {
+                return Err(CliError::input(format!(
+                    "the test record is sampled at {} Hz, the training record at {} Hz;                      creep and vibration are identified at one rate: resample one of them",
+                    crate::number(1.0 / step),
+                    crate::number(chain.sample_rate_hz)
+                )));
+            }
+        }
+    }
+    let result = match &chain_options {
+        Some(chain) => {
+            hystcomp_identify::crossval_chain(train_record, test_record, &options, chain)
+                .map(|c| (c.crossval, Some((c.plant_chain, c.inverse_chain))))
+        }
+        None => crossval(train_record, test_record, &options, &mut bar).map(|c| (c, None)),
+    };
+    let (cv, chains) = result.map_err(|e| match e {
         // Only the identification on the training record looks for it.
         IdentifyError::SameSignal => fit_error(e, &args.train, &train),
         e => CliError::from(e).context(format!(
@@ -177,6 +201,8 @@ pub fn run(args: &Args, ctx: Context) -> Result<(), CliError> {
             report,
             plant_model: &cv.plant,
             inverse_model: &cv.inverse,
+            plant_chain: chains.as_ref().map(|c| &c.0),
+            inverse_chain: chains.as_ref().map(|c| &c.1),
         };
         crate::print_json(&output)?;
         return Ok(());
@@ -184,8 +210,14 @@ pub fn run(args: &Args, ctx: Context) -> Result<(), CliError> {
     outln!("identified on {}:", args.train.display())?;
     outln!("plant model (voltage -> displacement, for IHC and WIHC):")?;
     print_fit(&report.plant)?;
+    if let Some((plant, _)) = &chains {
+        super::chain_args::print_chain(plant, &c.displacement_unit)?;
+    }
     outln!("inverse model (displacement -> voltage, for DIHC):")?;
     print_fit(&report.inverse)?;
+    if let Some((_, inverse)) = &chains {
+        super::chain_args::print_chain(inverse, &c.voltage_unit)?;
+    }
     let t = &report.test;
     let f = &t.forward;
     outln!(

@@ -202,6 +202,8 @@ pub struct Args {
     pub direction: Direction,
     #[command(flatten)]
     pub fit: FitArgs,
+    #[command(flatten)]
+    pub chain: super::chain_args::ChainArgs,
     /// Fraction of the samples after the warm-up, at the end, held out of the fit and
     /// reported separately, in [0, 1).
     #[arg(
@@ -612,6 +614,62 @@ pub fn fit_error(error: IdentifyError, path: &Path, loaded: &Loaded) -> CliError
     CliError::from(error).context(context)
 }
 
+#[derive(Serialize)]
+struct ChainOutput<'a> {
+    data: String,
+    output: String,
+    columns: &'a [String],
+    report: &'a hystcomp_identify::ChainReport,
+    model: &'a hystcomp_io::model_file::ModelFile,
+}
+
+/// `identify` with creep and vibration: the chain of `hystcomp_identify::chain`.
+fn run_chain(
+    args: &Args,
+    ctx: Context,
+    loaded: &Loaded,
+    options: &IdentifyOptions,
+    chain: &hystcomp_identify::ChainOptions,
+) -> Result<(), CliError> {
+    let fit =
+        hystcomp_identify::identify_chain(&loaded.voltage, &loaded.displacement, options, chain)
+            .map_err(|e| fit_error(e, &args.data, loaded))?;
+    let mut model = fit.model.clone();
+    if let Some(serde_json::Value::Object(map)) = &mut model.identification {
+        map.insert(
+            "data".to_owned(),
+            serde_json::Value::String(args.data.display().to_string()),
+        );
+        map.insert(
+            "columns".to_owned(),
+            serde_json::Value::from(loaded.names.clone()),
+        );
+    }
+    model
+        .save(&args.output)
+        .map_err(|e| CliError::output(e.to_string()))?;
+    if ctx.json {
+        crate::print_json(&ChainOutput {
+            data: args.data.display().to_string(),
+            output: args.output.display().to_string(),
+            columns: &loaded.names,
+            report: &fit.report,
+            model: &model,
+        })?;
+    } else {
+        outln!(
+            "{} chain identified from {} at {} Hz -> {}",
+            args.direction,
+            args.data.display(),
+            crate::number(chain.sample_rate_hz),
+            args.output.display()
+        )?;
+        print_fit(&fit.report.hysteresis)?;
+        super::chain_args::print_chain(&fit.report, &fit.report.hysteresis.output.unit)?;
+    }
+    Ok(())
+}
+
 /// Runs `hystcomp identify`.
 pub fn run(args: &Args, ctx: Context) -> Result<(), CliError> {
     args.fit.check_sizes()?;
@@ -625,6 +683,9 @@ pub fn run(args: &Args, ctx: Context) -> Result<(), CliError> {
         c.rows,
     )?;
     let options = args.fit.options(c, args.direction, args.holdout, &loaded)?;
+    if let Some(chain) = args.chain.options(c, &loaded)? {
+        return run_chain(args, ctx, &loaded, &options, &chain);
+    }
     let mut bar = if args.fit.iterates() {
         Bar::new("identifying", args.fit.iterations as u64)
     } else {

@@ -1,0 +1,208 @@
+//! The options of `identify` and `crossval` that add creep and vibration to the model (the
+//! chain hysteresis -> creep -> vibration, `hystcomp_identify::chain`).
+
+use hystcomp_identify::{ChainOptions, ChainReport, CreepOptions, DynamicsOptions};
+
+use super::identify::{ColumnArgs, Loaded};
+use crate::{CliError, bounds};
+
+/// Which links the model has.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum Structure {
+    /// The MPIM alone (format version 1's model).
+    Hysteresis,
+    /// The MPIM and a creep link.
+    Creep,
+    /// The MPIM, a creep link and a vibration link.
+    Full,
+}
+
+/// Creep and vibration options of `identify` and `crossval`.
+#[derive(Debug, Clone, clap::Args)]
+pub struct ChainArgs {
+    /// Links of the model: hysteresis (the MPIM alone), creep (with a creep link: first-order
+    /// elements at log-spaced time constants, fitted jointly with the hysteresis) or full
+    /// (also a vibration link: a unit-gain discrete model with a delay, order chosen from the
+    /// data). --creep and --dynamics add one link each. Creep and vibration need the sample
+    /// rate: a time column or --sample-rate.
+    #[arg(
+        long,
+        value_enum,
+        default_value = "hysteresis",
+        value_name = "STRUCTURE"
+    )]
+    pub model_structure: Structure,
+    /// Add the creep link (as --model-structure creep).
+    #[arg(long)]
+    pub creep: bool,
+    /// Add the vibration link (with the creep link: as --model-structure full).
+    #[arg(long)]
+    pub dynamics: bool,
+    /// The creep link's time constants, s, comma-separated and increasing (default: two per
+    /// decade from 10 ms, or two sample periods, to a quarter of the record, at most 1000 s).
+    #[arg(long, value_name = "T1,T2,...", value_delimiter = ',')]
+    pub creep_time_constants: Option<Vec<f64>>,
+    /// Seconds from the start of the record where the vibration segment (high-frequency
+    /// excitation) starts; default: the whole record.
+    #[arg(long, value_name = "SECONDS")]
+    pub dynamics_from: Option<f64>,
+    /// Seconds from the start where the vibration segment ends; default: the record's end.
+    #[arg(long, value_name = "SECONDS")]
+    pub dynamics_to: Option<f64>,
+    /// Fit the hysteresis and creep on every N-th sample (1 to 1000; the vibration link always
+    /// uses every sample).
+    #[arg(long, default_value_t = 1, value_name = "N")]
+    pub decimation: usize,
+}
+
+impl ChainArgs {
+    /// Whether the model has a creep link.
+    pub fn has_creep(&self) -> bool {
+        self.creep || self.dynamics || self.model_structure != Structure::Hysteresis
+    }
+
+    /// Whether the model has a vibration link.
+    pub fn has_dynamics(&self) -> bool {
+        self.dynamics || self.model_structure == Structure::Full
+    }
+
+    /// The chain's options for a record, `None` for the MPIM alone.
+    pub fn options(
+        &self,
+        columns: &ColumnArgs,
+        loaded: &Loaded,
+    ) -> Result<Option<ChainOptions>, CliError> {
+        if !self.has_creep() && !self.has_dynamics() {
+            return Ok(None);
+        }
+        bounds::count(
+            "--decimation",
+            self.decimation,
+            1..=hystcomp_identify::chain::MAX_DECIMATION,
+            "",
+        )?;
+        let rate = sample_rate(columns, loaded)?;
+        let creep = self.has_creep().then(|| match &self.creep_time_constants {
+            Some(t) => CreepOptions {
+                time_constants_s: t.clone(),
+            },
+            None => {
+                // From 10 ms (or two decimated periods) to a quarter of the record (at most
+                // 1000 s): longer elements would fit the sensor's drift, not creep.
+                let shortest = (2.0 * self.decimation as f64 / rate).max(0.01);
+                let record_s = loaded.voltage.len() as f64 / rate;
+                CreepOptions::log_spaced(shortest, (record_s / 4.0).clamp(shortest, 1000.0), 2)
+            }
+        });
+        if let Some(c) = &creep {
+            bounds::count(
+                "--creep-time-constants",
+                c.time_constants_s.len(),
+                1..=hystcomp_identify::chain::MAX_CREEP_ELEMENTS,
+                "time constants",
+            )?;
+        }
+        let dynamics = if self.has_dynamics() {
+            let n = loaded.voltage.len();
+            let at = |seconds: Option<f64>, default: usize, option: &str| match seconds {
+                None => Ok(default),
+                Some(s) if s.is_finite() && s >= 0.0 => Ok(((s * rate).round() as usize).min(n)),
+                Some(s) => Err(CliError::input(format!(
+                    "{option} {s}: give a time in seconds from the start, >= 0"
+                ))),
+            };
+            let from = at(self.dynamics_from, 0, "--dynamics-from")?;
+            let to = at(self.dynamics_to, n, "--dynamics-to")?;
+            if to <= from {
+                return Err(CliError::input(format!(
+                    "--dynamics-from .. --dynamics-to selects samples {from}..{to} of {n}: give \
+                     a segment that ends after it starts"
+                )));
+            }
+            Some(DynamicsOptions {
+                segment: Some(from..to),
+                ..DynamicsOptions::default()
+            })
+        } else {
+            None
+        };
+        Ok(Some(ChainOptions {
+            sample_rate_hz: rate,
+            decimation: self.decimation,
+            creep,
+            dynamics,
+            output_error_iterations: hystcomp_identify::chain::OUTPUT_ERROR_ITERATIONS,
+        }))
+    }
+}
+
+/// The record's sample rate: from the time column (its mean step), or --sample-rate.
+fn sample_rate(columns: &ColumnArgs, loaded: &Loaded) -> Result<f64, CliError> {
+    if let Some(time) = &loaded.time {
+        if time.len() >= 2 {
+            let step = (time[time.len() - 1] - time[0]) / (time.len() - 1) as f64;
+            if step > 0.0 && step.is_finite() {
+                return Ok(1.0 / step);
+            }
+        }
+    }
+    match columns.sample_rate {
+        Some(rate) if rate.is_finite() && rate > 0.0 => Ok(rate),
+        Some(rate) => Err(CliError::input(format!(
+            "--sample-rate {rate} is not usable: give a rate > 0 in Hz"
+        ))),
+        None => Err(CliError::input(
+            "creep and vibration need the record's sample rate: give --time-column or \
+             --sample-rate",
+        )),
+    }
+}
+
+/// Prints what the chain's links contribute, for people.
+pub fn print_chain(report: &ChainReport, unit: &str) -> Result<(), CliError> {
+    if let Some(c) = &report.creep {
+        outln!(
+            "  creep: {} elements ({} .. {} s), weights sum {:.4} (a held step creeps to {:.4} \
+             of itself)",
+            c.part.weights.len(),
+            crate::number(c.part.time_constants_s[0]),
+            crate::number(*c.part.time_constants_s.last().unwrap_or(&0.0)),
+            c.part.weights.iter().sum::<f64>(),
+            c.static_gain
+        )?;
+    }
+    if let Some(d) = &report.dynamics {
+        let modes: Vec<String> = d
+            .modes
+            .iter()
+            .map(|m| format!("{:.1} Hz (damping {:.3})", m.frequency_hz, m.damping_ratio))
+            .collect();
+        outln!(
+            "  vibration: {} poles, {} numerator coefficients, delay {} samples{}",
+            d.order.0,
+            d.order.1,
+            d.part.delay_samples,
+            if modes.is_empty() {
+                String::new()
+            } else {
+                format!(", resonances {}", modes.join(", "))
+            }
+        )?;
+    }
+    for c in &report.contributions {
+        outln!(
+            "  {:<12} RMS {:.4} % of the output range{}",
+            c.model,
+            c.rms_percent,
+            c.segment_rms_percent
+                .map(|s| format!(" ({s:.4} % on the vibration segment)"))
+                .unwrap_or_default()
+        )?;
+    }
+    outln!(
+        "  chain:       RMS {:.4} % ({} {unit}), max {:.4} % over the fitted samples",
+        report.fit.rms_percent,
+        crate::number(report.fit.rms),
+        report.fit.max_percent
+    )
+}
