@@ -221,6 +221,34 @@ fn identify_compensate_and_crossval_take_the_full_model() {
         stderr(&out)
     );
 
+    // bench: the model file's own chain timed beside its hysteresis compensators.
+    let out = hystcomp(&[
+        "--json",
+        "bench",
+        "--samples",
+        "500",
+        "--repeats",
+        "1",
+        "--model",
+        s(&plant),
+    ]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let json: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    let mine: Vec<&str> = json["figures"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .filter(|f| f["model"] == s(&plant))
+        .map(|f| {
+            assert!(f["median_ns_per_sample"].as_f64().unwrap() > 0.0, "{f}");
+            f["what"].as_str().unwrap()
+        })
+        .collect();
+    assert!(
+        mine.contains(&"chain-ihc") && mine.contains(&"ihc"),
+        "{mine:?}"
+    );
+
     // crossval: the chains' reports beside the usual one.
     let out = hystcomp(&[
         "--json",

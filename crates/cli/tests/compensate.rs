@@ -375,6 +375,9 @@ fn bench_reports_every_compensator_for_10_and_100_operators() {
         "wihc",
         "wihc-delayed",
         "dihc",
+        "creep-inverse",
+        "vibration-inverse",
+        "chain-ihc",
     ] {
         for n in [10, 100] {
             for precision in ["f64", "f32"] {
@@ -394,8 +397,8 @@ fn bench_reports_every_compensator_for_10_and_100_operators() {
             }
         }
     }
-    // Exactly those: 7 kinds x 2 sizes x 2 precisions, no figure twice.
-    assert_eq!(figures.len(), 7 * 2 * 2, "{report}");
+    // Exactly those: 10 kinds x 2 sizes x 2 precisions, no figure twice.
+    assert_eq!(figures.len(), 10 * 2 * 2, "{report}");
     assert_eq!(report["samples"], 2000);
     assert_eq!(report["repeats"], 3);
     let o = hystcomp(&["bench", "--samples", "10"]);

@@ -4,7 +4,10 @@
 //! (divide 1e9 by it for nanoseconds per sample).
 
 use criterion::{BenchmarkId, Criterion, Throughput, criterion_group, criterion_main};
-use hystcomp_core::{Compensator, Dihc, Ihc, Mpim, OutputLimits, Real, SolveMode, Wihc, paper};
+use hystcomp_core::{
+    ChainCompensator, Compensator, CreepInverse, Dihc, Ihc, Mpim, OutputLimits, Real, SolveMode,
+    VibrationInverse, Wihc, paper,
+};
 use std::hint::black_box;
 
 const SAMPLES: usize = 10_000;
@@ -133,10 +136,71 @@ fn bench_set_up(c: &mut Criterion) {
     group.finish();
 }
 
+/// Per-sample cost of the chain's links and of the whole chain compensator (vibration inverse
+/// with a preview, creep inverse, exact IHC), n = 10.
+fn bench_chain<T: Real>(c: &mut Criterion, type_name: &str) {
+    let mut group = c.benchmark_group(format!("chain_{type_name}"));
+    group.throughput(Throughput::Elements(SAMPLES as u64));
+    let model = plant::<T>(10);
+    let trajectory = desired(&model);
+    let mut out = vec![T::zero(); SAMPLES];
+    let limits = OutputLimits::new(T::zero(), T::one()).unwrap();
+    let links = hystcomp_core::reference::chain_links::<T>();
+    let (taus, weights, b, a) = (
+        links.time_constants_s,
+        links.weights,
+        links.numerator,
+        links.denominator,
+    );
+    let period = links.period_s;
+    let mut creep: CreepInverse<T, Vec<T>> =
+        CreepInverse::new(&taus, &weights, T::zero(), period).unwrap();
+    group.bench_function("creep_inverse", |bench| {
+        bench.iter(|| {
+            creep.reset();
+            for (y, o) in trajectory.iter().zip(out.iter_mut()) {
+                *o = creep.step(black_box(*y));
+            }
+        })
+    });
+    let needed = VibrationInverse::<T, Vec<T>>::needed_preview(&b, 1).unwrap();
+    for preview in [needed.min(8), needed] {
+        let mut vibration: VibrationInverse<T, Vec<T>> =
+            VibrationInverse::new(&b, &a, 1, preview).unwrap();
+        group.bench_with_input(
+            BenchmarkId::new("vibration_inverse_preview", preview),
+            &preview,
+            |bench, _| {
+                bench.iter(|| {
+                    vibration.reset();
+                    for (y, o) in trajectory.iter().zip(out.iter_mut()) {
+                        *o = vibration.step(black_box(*y));
+                    }
+                })
+            },
+        );
+    }
+    let ihc = Ihc::<T, Vec<T>>::new(&model, limits, SolveMode::Exact).unwrap();
+    let mut chain: ChainCompensator<T, Vec<T>, _> = ChainCompensator::new(
+        Some(VibrationInverse::new(&b, &a, 1, needed.min(8)).unwrap()),
+        Some(CreepInverse::new(&taus, &weights, T::zero(), period).unwrap()),
+        ihc,
+    );
+    group.bench_function("chain_ihc_exact", |bench| {
+        bench.iter(|| {
+            chain.reset();
+            chain.process(black_box(&trajectory), &mut out).unwrap();
+        })
+    });
+    group.finish();
+}
+
 fn benches(c: &mut Criterion) {
     bench_type::<f64>(c, "f64");
     bench_type::<f32>(c, "f32");
     bench_set_up(c);
+    bench_chain::<f64>(c, "f64");
+    bench_chain::<f32>(c, "f32");
 }
 
 criterion_group!(compensators, benches);

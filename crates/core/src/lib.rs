@@ -56,6 +56,8 @@ mod mpim;
 pub mod paper;
 mod play;
 mod real;
+#[cfg(feature = "alloc")]
+pub mod reference;
 mod roots;
 mod solve;
 mod vibration;

@@ -358,3 +358,45 @@ fn bad_links_are_refused_with_the_reason() {
     );
     assert!(error.to_string().contains("between 3"));
 }
+
+#[test]
+fn the_benchmarks_reference_chain_is_a_stable_resonance_with_a_zero_outside_the_circle() {
+    let links = hystcomp_core::reference::chain_links::<f64>();
+    assert_eq!(links.time_constants_s.len(), links.weights.len());
+    assert!((links.time_constants_s[0] - 0.01).abs() < 1e-15);
+    assert!((links.time_constants_s[10] - 1000.0).abs() < 1e-9);
+    // Unit static gain; poles inside the unit circle (r^2 = a_2 < 1).
+    let (b, a) = (&links.numerator, &links.denominator);
+    let gain = b.iter().sum::<f64>() / a.iter().sum::<f64>();
+    assert!((gain - 1.0).abs() < 1e-12, "{gain}");
+    assert!(a[2] > 0.0 && a[2] < 1.0);
+    // The zero at -2.5 makes the inverse anti-causal: more than the minimum preview is needed
+    // for a negligible cut, and a preview of 8 (the bench's) inverts it at all.
+    let minimum = VibrationInverse::<f64, Vec<f64>>::minimum_preview(b, links.delay).unwrap();
+    let needed = VibrationInverse::<f64, Vec<f64>>::needed_preview(b, links.delay).unwrap();
+    assert!(needed > minimum && minimum <= 8, "{minimum} {needed}");
+    // The forward links undo the chain of inverses (creep and vibration, preview as needed),
+    // in f64 and with the f32 links agreeing to single precision.
+    let mut r = rng(11);
+    let walk = random_input(&mut r, 3000, 0.2, 0.8);
+    let desired: Vec<f64> = std::iter::repeat_n(walk[0], 200).chain(walk).collect();
+    let mut inverse: VibrationInverse<f64, Vec<f64>> =
+        VibrationInverse::new(b, a, links.delay, needed).unwrap();
+    let mut x = vec![0.0; desired.len()];
+    inverse.process_aligned(&desired, &mut x).unwrap();
+    let mut creep_inverse: CreepInverse<f64, Vec<f64>> =
+        CreepInverse::new(&links.time_constants_s, &links.weights, 0.0, links.period_s).unwrap();
+    let h: Vec<f64> = x.iter().map(|&v| creep_inverse.step(v)).collect();
+    let mut creep: Creep<f64, Vec<f64>> =
+        Creep::new(&links.time_constants_s, &links.weights, 0.0, links.period_s).unwrap();
+    let mut vibration: Vibration<f64, Vec<f64>> = Vibration::new(b, a, links.delay).unwrap();
+    vibration.settle(desired[0]);
+    for (k, hk) in h.iter().enumerate() {
+        let y = vibration.step(creep.step(*hk));
+        assert!((y - desired[k]).abs() < 1e-7, "{k}: {y} vs {}", desired[k]);
+    }
+    let single = hystcomp_core::reference::chain_links::<f32>();
+    for (s, d) in single.numerator.iter().zip(b) {
+        assert!((f64::from(*s) - d).abs() < 1e-6 * d.abs().max(1.0));
+    }
+}

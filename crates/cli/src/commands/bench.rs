@@ -8,8 +8,12 @@ use std::hint::black_box;
 use std::path::PathBuf;
 use std::time::Instant;
 
-use hystcomp_core::{Compensator, Dihc, Ihc, Mpim, OutputLimits, Real, SolveMode, Wihc, paper};
+use hystcomp_core::{
+    ChainCompensator, Compensator, CreepInverse, Dihc, Ihc, Mpim, OutputLimits, Real, SolveMode,
+    VibrationInverse, Wihc, paper,
+};
 use hystcomp_experiments::Reference;
+use hystcomp_io::compensator::{Method, ScaledCompensator};
 use hystcomp_io::model_file::{Direction, ModelFile};
 use serde::Serialize;
 
@@ -43,12 +47,20 @@ const MAX_SAMPLES: usize = 1_000_000;
 /// Most timed runs per figure (`--repeats`).
 const MAX_REPEATS: usize = 1_000;
 
+/// The preview of the reference chain's vibration inverse, samples (as a streaming user would
+/// choose: a few samples of latency; see `hystcomp_core::reference`).
+const CHAIN_PREVIEW: usize = 8;
+
 /// One measured figure.
 #[derive(Debug, Clone, Serialize)]
 struct Figure {
     /// `mpim-forward` (a whole signal: consecutive samples overlap in the processor),
     /// `mpim-chained` (each input waits for the previous output, as in a control loop),
-    /// `ihc`, `ihc-delayed`, `wihc`, `wihc-delayed` or `dihc`.
+    /// `ihc`, `ihc-delayed`, `wihc`, `wihc-delayed` or `dihc`; for the built-in models also
+    /// the chain's links (`creep-inverse`, `vibration-inverse`, each alone, per sample) and
+    /// `chain-ihc` (vibration inverse with a preview of 8 samples, creep inverse and exact IHC:
+    /// the links of `hystcomp_core::reference`); for a model file with creep or vibration
+    /// parts, `chain-ihc` with its own links (the preview an offline inversion needs).
     what: &'static str,
     /// Where the model came from: `table1` / `table2` spread over `operators`, or the file.
     model: String,
@@ -139,6 +151,7 @@ impl Bench {
         name: &str,
         plant: &Mpim<T, Vec<T>>,
         precision: &'static str,
+        reference_chain: bool,
     ) -> Result<(), CliError> {
         let n = plant.len();
         let (volts, desired) = trajectory(plant, self.samples);
@@ -189,6 +202,74 @@ impl Bench {
                     .expect("equal lengths");
             });
         }
+        if !reference_chain {
+            return Ok(());
+        }
+        // The chain (hystcomp_core::reference): each link, then the whole chain around the
+        // exact IHC, streaming with a preview of 8 samples.
+        let links = hystcomp_core::reference::chain_links::<T>();
+        let mut creep: CreepInverse<T, Vec<T>> = CreepInverse::new(
+            &links.time_constants_s,
+            &links.weights,
+            T::zero(),
+            links.period_s,
+        )?;
+        self.record("creep-inverse", name, n, precision, || {
+            creep.reset();
+            for (y, o) in desired.iter().zip(out.iter_mut()) {
+                *o = creep.step(black_box(*y));
+            }
+        });
+        let vibration = || {
+            VibrationInverse::<T, Vec<T>>::new(
+                &links.numerator,
+                &links.denominator,
+                links.delay,
+                CHAIN_PREVIEW,
+            )
+        };
+        let mut inverse = vibration()?;
+        self.record("vibration-inverse", name, n, precision, || {
+            inverse.reset();
+            for (y, o) in desired.iter().zip(out.iter_mut()) {
+                *o = inverse.step(black_box(*y));
+            }
+        });
+        let mut chain: ChainCompensator<T, Vec<T>, _> = ChainCompensator::new(
+            Some(vibration()?),
+            Some(creep.clone()),
+            Ihc::<T, Vec<T>>::new(plant, limits, SolveMode::Exact)?,
+        );
+        self.record("chain-ihc", name, n, precision, || {
+            chain.reset();
+            chain
+                .process(black_box(&desired), &mut out)
+                .expect("equal lengths");
+        });
+        Ok(())
+    }
+
+    /// The chain of a model file with creep or vibration parts around the exact IHC, in the
+    /// file's physical units, over the bench's trajectory mapped onto its output scale.
+    fn file_chain(
+        &mut self,
+        name: &str,
+        file: &ModelFile,
+        plant: &Mpim<f64, Vec<f64>>,
+    ) -> Result<(), CliError> {
+        let (_, desired) = trajectory(plant, self.samples);
+        let desired: Vec<f64> = desired
+            .iter()
+            .map(|&y| file.output_to_physical(y))
+            .collect();
+        let mut out = vec![0.0; self.samples];
+        let mut chain = ScaledCompensator::new(file, Method::Ihc, None)?;
+        self.record("chain-ihc", name, plant.len(), "f64", || {
+            chain.reset();
+            for (y, o) in desired.iter().zip(out.iter_mut()) {
+                *o = chain.step(black_box(*y));
+            }
+        });
         Ok(())
     }
 
@@ -240,8 +321,8 @@ pub fn run(args: &Args, ctx: Context) -> Result<(), CliError> {
         } else {
             format!("table1 spread over {n}")
         };
-        bench.plant::<f64>(&name, &paper::TABLE1.spread(n)?, "f64")?;
-        bench.plant::<f32>(&name, &paper::TABLE1.spread(n)?, "f32")?;
+        bench.plant::<f64>(&name, &paper::TABLE1.spread(n)?, "f64", true)?;
+        bench.plant::<f32>(&name, &paper::TABLE1.spread(n)?, "f32", true)?;
         let name = name.replace("table1", "table2");
         bench.inverse::<f64>(&name, &paper::TABLE2.spread(n)?, "f64")?;
         bench.inverse::<f32>(&name, &paper::TABLE2.spread(n)?, "f32")?;
@@ -250,9 +331,16 @@ pub fn run(args: &Args, ctx: Context) -> Result<(), CliError> {
         let name = path.display().to_string();
         let model = file.model()?;
         match file.direction {
-            Direction::Plant => bench.plant::<f64>(&name, &model, "f64").map_err(|e| {
-                e.context(format!("{name} (the model must be invertible on [0, 1])"))
-            })?,
+            Direction::Plant => {
+                bench
+                    .plant::<f64>(&name, &model, "f64", false)
+                    .map_err(|e| {
+                        e.context(format!("{name} (the model must be invertible on [0, 1])"))
+                    })?;
+                if file.has_links() {
+                    bench.file_chain(&name, file, &model)?;
+                }
+            }
             Direction::Inverse => bench.inverse::<f64>(&name, &model, "f64")?,
         }
     }
@@ -270,7 +358,7 @@ pub fn run(args: &Args, ctx: Context) -> Result<(), CliError> {
         report.repeats,
         report.samples
     )?;
-    outln!("{:<14} {:>10} {:>22} {:>22}", "", "operators", "f64", "f32")?;
+    outln!("{:<18} {:>10} {:>22} {:>22}", "", "operators", "f64", "f32")?;
     let mut rows: Vec<(&str, String, usize)> = Vec::new();
     for f in &report.figures {
         let key = (f.what, f.model.clone(), f.operators);
@@ -293,7 +381,7 @@ pub fn run(args: &Args, ctx: Context) -> Result<(), CliError> {
                 .unwrap_or_else(|| "-".into())
         };
         outln!(
-            "{:<14} {:>10} {:>22} {:>22}   {}",
+            "{:<18} {:>10} {:>22} {:>22}   {}",
             what,
             n,
             cell("f64"),
