@@ -16,6 +16,10 @@ pub const EXIT_SATURATED: u8 = 4;
 /// `--no-check` exits 0 instead).
 pub const EXIT_CHECK_FAILED: u8 = 5;
 
+/// Exit code when the divergence guard stopped the learning (`learn`): the output holds the
+/// last good drive.
+pub const EXIT_DIVERGED: u8 = 6;
+
 /// The exit codes, as `--help` shows them and the README lists them (one line each; a new
 /// code gets a constant above and a line here).
 pub const EXIT_CODES_HELP: &str = "\
@@ -25,7 +29,8 @@ Exit status:
   2  usage (an unknown option, a missing or malformed argument)
   3  an output could not be written
   4  saturation: the work was done, but the drive was clamped to its limits (compensate)
-  5  an acceptance check failed (reproduce; --no-check exits 0)";
+  5  an acceptance check failed (reproduce; --no-check exits 0)
+  6  the divergence guard stopped the learning; the output holds the last good drive (learn)";
 
 /// An error that ends the command with a message on stderr and a non-zero exit code.
 #[derive(Debug)]

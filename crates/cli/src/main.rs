@@ -58,6 +58,9 @@ enum Command {
     Signal(commands::signal::Args),
     /// Drive the simulated stage with a voltage record.
     Simulate(commands::simulate::Args),
+    /// Learn from repetition: the next trial's drive from the last trial's measurement
+    /// (iterative learning), or the whole loop on the simulated stage (--simulate).
+    Learn(commands::learn::Args),
     /// Reproduce the paper's comparative study on the simulated stage.
     Reproduce(commands::reproduce::Args),
     /// Tracking indices e_m, e_rms and e_mhe of a measured record against a desired one.
@@ -126,6 +129,7 @@ fn main() -> ExitCode {
         Command::Crossval(args) => run(args, ctx, commands::crossval::run),
         Command::Signal(args) => run(args, ctx, commands::signal::run),
         Command::Simulate(args) => run(args, ctx, commands::simulate::run),
+        Command::Learn(args) => run(args, ctx, commands::learn::run),
         Command::Reproduce(args) => run(args, ctx, commands::reproduce::run),
         Command::Evaluate(args) => run(args, ctx, commands::evaluate::run),
     };

@@ -149,3 +149,35 @@ pub fn run_trials(
     }
     Ok(out)
 }
+
+/// The study's `exact` plant model on `stage`: the identification excitation from rest
+/// (sensor-noise seed `seed`), every tenth sample, constrained least squares with `operators`
+/// play operators (as `hystcomp reproduce` identifies it).
+pub fn exact_plant_model(
+    stage: &StageConfig,
+    seed: u64,
+    operators: usize,
+) -> Result<hystcomp_io::model_file::ModelFile, TrialError> {
+    use hystcomp_identify::{IdentifyOptions, Method, Thresholds, Warmup, identify};
+    let mut excitation = crate::excitation::IdentificationExcitation::default();
+    excitation.full_scale_v = stage.full_scale_command_v();
+    let command = excitation.command_v(stage.sample_rate_hz);
+    let response = Stage::new(stage, seed)?.run(&command);
+    let v: Vec<f64> = command.iter().step_by(10).copied().collect();
+    let y: Vec<f64> = response
+        .measured_position_um
+        .iter()
+        .step_by(10)
+        .copied()
+        .collect();
+    let options = IdentifyOptions {
+        thresholds: Thresholds::Uniform(operators),
+        warmup: Warmup::Samples(0),
+        max_fit_rms_percent: None,
+        method: Method::LeastSquares,
+        ..IdentifyOptions::default()
+    };
+    identify(&v, &y, &options)
+        .map(|id| id.model)
+        .map_err(|e| TrialError::Option(format!("identifying the stage's plant model: {e}")))
+}

@@ -2,33 +2,15 @@
 //! pipeline's plant model (least squares on the study's identification record), its IHC as
 //! trial 0, trials from rest with a fresh noise seed each.
 
-use hystcomp_experiments::excitation::IdentificationExcitation;
-use hystcomp_experiments::learning::{SimulatedTrial, run_trials};
+use hystcomp_experiments::learning::{SimulatedTrial, exact_plant_model, run_trials};
 use hystcomp_experiments::signals::{Raster, Shape, Signal};
-use hystcomp_identify::{IdentifyOptions, Method, Thresholds, Warmup, identify};
 use hystcomp_io::model_file::ModelFile;
 use hystcomp_learn::{Learner, LearningOptions, Status};
-use hystcomp_stage::{Stage, StageConfig};
+use hystcomp_stage::StageConfig;
 
 /// The study's `exact` plant model on `stage`.
 fn exact_plant(stage: &StageConfig) -> ModelFile {
-    let command = IdentificationExcitation::default().command_v(stage.sample_rate_hz);
-    let response = Stage::new(stage, 1).unwrap().run(&command);
-    let v: Vec<f64> = command.iter().step_by(10).copied().collect();
-    let y: Vec<f64> = response
-        .measured_position_um
-        .iter()
-        .step_by(10)
-        .copied()
-        .collect();
-    let options = IdentifyOptions {
-        thresholds: Thresholds::Uniform(10),
-        warmup: Warmup::Samples(0),
-        max_fit_rms_percent: None,
-        method: Method::LeastSquares,
-        ..IdentifyOptions::default()
-    };
-    identify(&v, &y, &options).unwrap().model
+    exact_plant_model(stage, 1, 10).unwrap()
 }
 
 fn learn(

@@ -36,8 +36,9 @@ pub struct LearningLaw {
     /// The stationary variance of the learned reference's noise, relative to the sensor
     /// noise's, for white noise and a model whose slope is right: `sum over f of (gamma Q)^2 /
     /// (1 - (1 - gamma Q)^2)`, averaged over the band (bounded: the noise does not grow trial
-    /// after trial; see the crate documentation).
-    pub stationary_noise_ratio: f64,
+    /// after trial; see the crate documentation). `None` when `gamma Q` reaches 2 somewhere:
+    /// there the update does not contract, and the noise (like the error) grows.
+    pub stationary_noise_ratio: Option<f64>,
     /// The divergence factor.
     pub divergence_factor: f64,
     /// The exact inverse the reference is fed to.
@@ -298,6 +299,42 @@ impl Learner {
         Ok(out[start..start + n].to_vec())
     }
 
+    /// Restores what earlier trials measured, for a learner resumed from files
+    /// ([`Learner::resume`]): their indices (the next update is trial `history.len()`) and the
+    /// best of them with its drive (the last good drive, which the divergence guard falls back
+    /// to). Refuses a best trial beyond the history, a drive of another length, outside the
+    /// limits or not finite.
+    pub fn restore_history(
+        &mut self,
+        history: &[TrackingIndices],
+        best: Option<(usize, &[f64])>,
+    ) -> Result<(), LearnError> {
+        if let Some((trial, drive)) = best {
+            if trial >= history.len() {
+                return Err(LearnError::Option {
+                    option: "best trial",
+                    value: trial.to_string(),
+                    reason: format!("the history holds {} trials", history.len()),
+                });
+            }
+            check_length("best drive", self.desired.len(), drive)?;
+            check_finite("best drive", drive)?;
+            let (lo, hi) = self.law.limits;
+            if drive.iter().any(|v| *v < lo || *v > hi) {
+                return Err(LearnError::Option {
+                    option: "best drive",
+                    value: "a sample".into(),
+                    reason: format!("it leaves the limits {lo} .. {hi}"),
+                });
+            }
+            self.best = Some((trial, history[trial].e_rms_percent, drive.to_vec()));
+        } else {
+            self.best = None;
+        }
+        self.history = history.to_vec();
+        Ok(())
+    }
+
     /// The drive of the next trial (model voltage unit): within the limits, never NaN. After
     /// the divergence guard tripped, the best trial's drive.
     pub fn drive(&self) -> &[f64] {
@@ -444,7 +481,7 @@ fn reachable_range(model: &ModelFile, limits: (f64, f64)) -> Result<(f64, f64), 
 /// contracts (`0 < gamma Q < 2`), the stationary variance of the reference's noise per unit
 /// of white sensor-noise variance (scalar recursion `d_k+1 = (1 - g) d_k + g n_k`); 0 where
 /// `Q` vanishes. Evaluated on a fine grid up to half the sample rate.
-fn stationary_noise_ratio(options: &LearningOptions, bandwidth_hz: f64) -> f64 {
+fn stationary_noise_ratio(options: &LearningOptions, bandwidth_hz: f64) -> Option<f64> {
     const GRID: usize = 4096;
     let nyquist = options.sample_rate_hz / 2.0;
     let mut sum = 0.0;
@@ -459,5 +496,6 @@ fn stationary_noise_ratio(options: &LearningOptions, bandwidth_hz: f64) -> f64 {
             f64::INFINITY
         };
     }
-    sum / GRID as f64
+    let ratio = sum / GRID as f64;
+    ratio.is_finite().then_some(ratio)
 }

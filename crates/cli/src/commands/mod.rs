@@ -6,6 +6,7 @@ pub mod compensate;
 pub mod crossval;
 pub mod evaluate;
 pub mod identify;
+pub mod learn;
 pub mod reproduce;
 pub mod signal;
 pub mod simulate;

@@ -1,0 +1,328 @@
+//! `hystcomp learn`: the hardware loop one trial at a time (here `simulate` stands in for the
+//! stage: the drive played for two periods from rest, the second recorded), the state carried
+//! by the drive files, the divergence guard's exit status and kept drive, `--simulate`, and
+//! refusals. Short records (the paper's trajectory ten times faster, 1 s at 10 kHz).
+
+mod common;
+
+use std::path::Path;
+
+use common::{assert_fails, hystcomp, models, s, stderr, stdout};
+use hystcomp_io::data::{Column, ReadOptions, read_columns};
+
+fn column(path: &Path, name: &str) -> Vec<f64> {
+    read_columns(path, &[Column::Name(name.into())], &ReadOptions::default())
+        .unwrap()
+        .values
+        .remove(0)
+}
+
+/// Plays `drive` (its `drive_v`) twice on the built-in stage from rest and writes the second
+/// period's measurement to `measured` (time_s, measured_um).
+fn run_on_stage(dir: &Path, drive: &Path, measured: &Path, seed: u64) {
+    let v = column(drive, "drive_v");
+    let n = v.len();
+    let play = dir.join("play.csv");
+    let mut text = String::from("time_s,drive_v\n");
+    for k in 0..2 * n {
+        text.push_str(&format!("{},{}\n", k as f64 * 1e-4, v[k % n]));
+    }
+    std::fs::write(&play, text).unwrap();
+    let out_path = dir.join("stage.csv");
+    let seed = seed.to_string();
+    let out = hystcomp(&[
+        "simulate",
+        "--drive",
+        s(&play),
+        "--seed",
+        &seed,
+        "-o",
+        s(&out_path),
+    ]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let y = column(&out_path, "measured_um");
+    let mut text = String::from("time_s,measured_um\n");
+    for k in 0..n {
+        text.push_str(&format!("{},{}\n", k as f64 * 1e-4, y[n + k]));
+    }
+    std::fs::write(measured, text).unwrap();
+}
+
+/// desired.csv (one period of the paper's trajectory, 1 s) and drive_0.csv (Table 1's IHC).
+fn setup(dir: &Path) {
+    let desired = dir.join("desired.csv");
+    let out = hystcomp(&[
+        "signal",
+        "paper",
+        "--speed",
+        "10",
+        "--duration",
+        "1",
+        "-o",
+        s(&desired),
+    ]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let model = models().join("table1-plant.json");
+    let drive = dir.join("drive_0.csv");
+    let out = hystcomp(&[
+        "compensate",
+        "--model",
+        s(&model),
+        "--method",
+        "ihc",
+        "--desired",
+        s(&desired),
+        "-o",
+        s(&drive),
+    ]);
+    assert!(out.status.success(), "{}", stderr(&out));
+}
+
+fn learn(dir: &Path, k: usize, extra: &[&str]) -> std::process::Output {
+    let model = models().join("table1-plant.json");
+    let (drive, measured, next) = (
+        dir.join(format!("drive_{k}.csv")),
+        dir.join(format!("meas_{k}.csv")),
+        dir.join(format!("drive_{}.csv", k + 1)),
+    );
+    let mut args = vec![
+        "--json",
+        "learn",
+        "--desired",
+        s(&dir.join("desired.csv")).to_owned().leak(),
+        "--drive",
+        s(&drive).to_owned().leak(),
+        "--measured",
+        s(&measured).to_owned().leak(),
+        "--model",
+        s(&model).to_owned().leak(),
+        "-o",
+        s(&next).to_owned().leak(),
+    ];
+    args.extend(extra);
+    hystcomp(&args)
+}
+
+#[test]
+fn the_hardware_loop_learns_trial_after_trial_from_the_files_alone() {
+    let dir = tempfile::tempdir().unwrap();
+    setup(dir.path());
+    let mut e_rms = Vec::new();
+    for k in 0..4 {
+        run_on_stage(
+            dir.path(),
+            &dir.path().join(format!("drive_{k}.csv")),
+            &dir.path().join(format!("meas_{k}.csv")),
+            10 + k as u64,
+        );
+        let out = learn(dir.path(), k, &[]);
+        assert!(out.status.success(), "trial {k}: {}", stderr(&out));
+        let report: serde_json::Value = serde_json::from_str(&stdout(&out)).unwrap();
+        assert_eq!(report["trial"], k);
+        assert!(
+            report["predicted"]["e_rms_percent"].as_f64().unwrap()
+                < report["indices"]["e_rms_percent"].as_f64().unwrap()
+        );
+        e_rms.push(report["indices"]["e_rms_percent"].as_f64().unwrap());
+        let state: serde_json::Value = serde_json::from_str(
+            &std::fs::read_to_string(dir.path().join(format!("drive_{}.learn.json", k + 1)))
+                .unwrap(),
+        )
+        .unwrap();
+        assert_eq!(
+            state["history"].as_array().unwrap().len(),
+            k + 1,
+            "the state carries every trial"
+        );
+        let next = column(&dir.path().join(format!("drive_{}.csv", k + 1)), "drive_v");
+        assert!(next.iter().all(|v| (0.0..=10.0).contains(v)));
+    }
+    assert!(e_rms[3] < 0.2 * e_rms[0], "{e_rms:?}");
+    // Text output: the trial's indices, the prediction and the law.
+    run_on_stage(
+        dir.path(),
+        &dir.path().join("drive_4.csv"),
+        &dir.path().join("meas_4.csv"),
+        20,
+    );
+    let model = models().join("table1-plant.json");
+    let out = hystcomp(&[
+        "learn",
+        "--desired",
+        s(&dir.path().join("desired.csv")),
+        "--drive",
+        s(&dir.path().join("drive_4.csv")),
+        "--measured",
+        s(&dir.path().join("meas_4.csv")),
+        "--model",
+        s(&model),
+        "-o",
+        s(&dir.path().join("drive_5.csv")),
+    ]);
+    let text = stdout(&out);
+    for fragment in [
+        "trial 4: e_rms = ",
+        "predicted trial 5: e_rms = ",
+        "learning law: gain 0.8",
+        "Q cut-off 100 Hz",
+    ] {
+        assert!(text.contains(fragment), "{fragment:?} in {text}");
+    }
+}
+
+#[test]
+fn a_gain_too_high_is_stopped_with_exit_6_and_the_last_good_drive_kept() {
+    let dir = tempfile::tempdir().unwrap();
+    setup(dir.path());
+    let drive_0 = column(&dir.path().join("drive_0.csv"), "drive_v");
+    let mut stopped = None;
+    for k in 0..4 {
+        run_on_stage(
+            dir.path(),
+            &dir.path().join(format!("drive_{k}.csv")),
+            &dir.path().join(format!("meas_{k}.csv")),
+            30 + k as u64,
+        );
+        let out = learn(dir.path(), k, &["--gain", "5"]);
+        if out.status.code() == Some(6) {
+            stopped = Some((k, stderr(&out)));
+            break;
+        }
+        assert!(out.status.success(), "{}", stderr(&out));
+    }
+    let (k, message) = stopped.expect("the guard trips");
+    assert!(
+        message.contains("divergence guard stopped the learning")
+            && message.contains("last good drive")
+            && message.contains("--gain"),
+        "{message}"
+    );
+    let kept = column(&dir.path().join(format!("drive_{}.csv", k + 1)), "drive_v");
+    let best = column(
+        &dir.path().join(format!("drive_{}.csv", k + 1)),
+        "best_drive_v",
+    );
+    assert_eq!(kept, best);
+    if k == 1 {
+        for (a, b) in kept.iter().zip(&drive_0) {
+            assert!((a - b).abs() < 1e-9);
+        }
+    }
+    // A stopped learning refuses to go on from that drive until its state file is removed.
+    run_on_stage(
+        dir.path(),
+        &dir.path().join(format!("drive_{}.csv", k + 1)),
+        &dir.path().join(format!("meas_{}.csv", k + 1)),
+        40,
+    );
+    let out = learn(dir.path(), k + 1, &[]);
+    assert_eq!(out.status.code(), Some(1), "{}", stderr(&out));
+    assert!(stderr(&out).contains("remove"), "{}", stderr(&out));
+}
+
+#[test]
+fn simulate_runs_the_loop_on_the_stage() {
+    let dir = tempfile::tempdir().unwrap();
+    setup(dir.path());
+    let model = models().join("table1-plant.json");
+    let out_path = dir.path().join("learned.csv");
+    let out = hystcomp(&[
+        "--json",
+        "learn",
+        "--simulate",
+        "--desired",
+        s(&dir.path().join("desired.csv")),
+        "--model",
+        s(&model),
+        "--trials",
+        "4",
+        "-o",
+        s(&out_path),
+    ]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let report: serde_json::Value = serde_json::from_str(&stdout(&out)).unwrap();
+    let trials = report["trials"].as_array().unwrap();
+    assert_eq!(trials.len(), 4);
+    let e = |t: &serde_json::Value| t["update"]["indices"]["e_rms_percent"].as_f64().unwrap();
+    assert!(e(&trials[3]) < 0.2 * e(&trials[0]));
+    assert!(out_path.exists() && dir.path().join("learned.learn.json").exists());
+}
+
+#[test]
+fn bad_learning_inputs_are_refused_with_the_option_named() {
+    let dir = tempfile::tempdir().unwrap();
+    setup(dir.path());
+    run_on_stage(
+        dir.path(),
+        &dir.path().join("drive_0.csv"),
+        &dir.path().join("meas_0.csv"),
+        3,
+    );
+    let d = dir.path();
+    let model = models().join("table1-plant.json");
+    let base = |extra: &[&str], output: &Path| {
+        let mut a: Vec<String> = [
+            "learn",
+            "--desired",
+            s(&d.join("desired.csv")),
+            "--drive",
+            s(&d.join("drive_0.csv")),
+            "--measured",
+            s(&d.join("meas_0.csv")),
+            "--model",
+            s(&model),
+            "-o",
+            s(output),
+        ]
+        .iter()
+        .map(|x| x.to_string())
+        .collect();
+        a.extend(extra.iter().map(|x| x.to_string()));
+        a
+    };
+    let check = |extra: &[&str], output: &Path, fragments: &[&str]| {
+        let a = base(extra, output);
+        let refs: Vec<&str> = a.iter().map(String::as_str).collect();
+        assert_fails(&refs, fragments);
+    };
+    let out = d.join("next.csv");
+    check(&["--gain", "0"], &out, &["--gain", "above 0"]);
+    check(&["--gain", "11"], &out, &["--gain", "at most 10"]);
+    check(
+        &["--bandwidth", "6000"],
+        &out,
+        &["--bandwidth", "half the sample rate"],
+    );
+    check(
+        &["--divergence-factor", "1"],
+        &out,
+        &["--divergence-factor"],
+    );
+    check(&[], &d.join("drive_0.csv"), &["--output"]);
+    // A measured record of another length.
+    let text = std::fs::read_to_string(d.join("meas_0.csv")).unwrap();
+    let short: String = text.lines().take(500).map(|l| format!("{l}\n")).collect();
+    std::fs::write(d.join("short.csv"), short).unwrap();
+    let a: Vec<String> = [
+        "learn",
+        "--desired",
+        s(&d.join("desired.csv")),
+        "--drive",
+        s(&d.join("drive_0.csv")),
+        "--measured",
+        s(&d.join("short.csv")),
+        "--model",
+        s(&model),
+        "-o",
+        s(&out),
+    ]
+    .iter()
+    .map(|x| x.to_string())
+    .collect();
+    let refs: Vec<&str> = a.iter().map(String::as_str).collect();
+    assert_fails(&refs, &["499 samples", "aligned sample by sample"]);
+    assert!(!out.exists(), "nothing written on refusal");
+    // The output's state file may not be an input either (here: the drive's own state file).
+    std::fs::write(d.join("drive_0.learn.json"), "{}").unwrap();
+    check(&[], &d.join("drive_0.out"), &["state file"]);
+}
