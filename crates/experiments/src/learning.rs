@@ -159,8 +159,10 @@ pub fn exact_plant_model(
     operators: usize,
 ) -> Result<hystcomp_io::model_file::ModelFile, TrialError> {
     use hystcomp_identify::{IdentifyOptions, Method, Thresholds, Warmup, identify};
-    let mut excitation = crate::excitation::IdentificationExcitation::default();
-    excitation.full_scale_v = stage.full_scale_command_v();
+    let excitation = crate::excitation::IdentificationExcitation {
+        full_scale_v: stage.full_scale_command_v(),
+        ..Default::default()
+    };
     let command = excitation.command_v(stage.sample_rate_hz);
     let response = Stage::new(stage, seed)?.run(&command);
     let v: Vec<f64> = command.iter().step_by(10).copied().collect();
