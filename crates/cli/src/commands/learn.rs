@@ -407,7 +407,11 @@ fn trial(
         Some(c) => c.clone(),
         None => {
             let named = Column::Name("measured_um".into());
-            match data::read_columns(measured_path, &[named.clone()], &read_options(args)) {
+            match data::read_columns(
+                measured_path,
+                std::slice::from_ref(&named),
+                &read_options(args),
+            ) {
                 Ok(_) => named,
                 Err(_) => Column::Index(2),
             }
