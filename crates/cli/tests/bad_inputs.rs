@@ -512,7 +512,7 @@ fn the_protected_commands_still_write_new_outputs() {
 }
 
 /// Issue 13, "Broken pipe": a reader that closes stdout before the command prints leaves
-/// every command exiting with its usual status, without a panic or a message.
+/// every command exiting with its usual status, without a panic or a message about the pipe.
 #[test]
 #[allow(clippy::incompatible_msrv)] // std::io::pipe, in a test only
 fn a_closed_stdout_ends_every_command_quietly() {
@@ -597,7 +597,13 @@ fn a_closed_stdout_ends_every_command_quietly() {
             .unwrap();
         let message = stderr(&out);
         assert_eq!(out.status.code(), Some(0), "{args:?}: {message}");
-        assert!(message.is_empty(), "{args:?} said: {message}");
+        // Warnings about the work itself (compensate's feasibility check: the fixture's
+        // trajectory starts away from rest) are not about the pipe; anything else is.
+        let unexpected: Vec<&str> = message
+            .lines()
+            .filter(|line| !line.starts_with("hystcomp: warning: the stage's amplifier"))
+            .collect();
+        assert!(unexpected.is_empty(), "{args:?} said: {message}");
     }
 }
 

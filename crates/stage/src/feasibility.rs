@@ -78,11 +78,33 @@ impl Feasibility {
     }
 }
 
-/// Runs the stage's DAC and amplifier over `command_v` from rest (see the
-/// [module documentation](self)). Non-finite commands are held, as the stage holds them.
+/// Runs the stage's DAC and amplifier over `command_v` from rest, one command per sample
+/// period of the stage (see the [module documentation](self)). Non-finite commands are held,
+/// as the stage holds them.
 pub fn feasibility(config: &StageConfig, command_v: &[f64]) -> Result<Feasibility, StageError> {
     config.validate()?;
-    let period_s = 1.0 / config.sample_rate_hz;
+    feasibility_held(config, command_v, 1.0 / config.sample_rate_hz)
+}
+
+/// As [`feasibility`], for a command whose samples are each held for `period_s` seconds (a
+/// drive computed at its own rate, for example a trajectory sampled at 1 kHz sent through
+/// a stage that samples at 10 kHz). The amplifier's response to a held input is computed
+/// exactly over the whole period (its slew then its first-order approach), so a sample counts
+/// as slew-limited when the output slewed for the whole period, and the lag is the one at the
+/// period's end; with `period_s` the stage's own period this is [`feasibility`].
+pub fn feasibility_held(
+    config: &StageConfig,
+    command_v: &[f64],
+    period_s: f64,
+) -> Result<Feasibility, StageError> {
+    config.validate()?;
+    if !(period_s.is_finite() && period_s > 0.0) {
+        return Err(StageError::invalid(
+            "the command's sample period (s)",
+            "a positive, finite number of seconds",
+            period_s,
+        ));
+    }
     let gain = config.amplifier.gain;
     let dac = Quantiser::new(&config.dac);
     let mut amplifier = Amplifier::new(&config.amplifier, period_s);
@@ -142,6 +164,38 @@ mod tests {
                 rise * (5.0 + amplitude_v * (2.0 * std::f64::consts::PI * frequency_hz * t).sin())
             })
             .collect()
+    }
+
+    #[test]
+    fn a_drive_held_for_its_own_period_is_judged_at_that_period() {
+        let config = StageConfig::default();
+        // 1 kHz samples of a 5 Hz, 4 V tone from rest: 15 * 4 * 2 pi 5 = 1.9 kV/s, well within the
+        // amplifier's 14.3 kV/s; read at the stage's 10 kHz the same steps would ask 10x.
+        let tone: Vec<f64> = (0..2000)
+            .map(|k| 4.0 - 4.0 * (2.0 * std::f64::consts::PI * 5.0 * k as f64 * 1e-3).cos())
+            .collect();
+        let held = feasibility_held(&config, &tone, 1e-3).unwrap();
+        assert!(held.is_feasible(), "{}", held.summary());
+        assert!(
+            (held.peak_slew_v_per_s - 1_885.0).abs() < 20.0,
+            "{}",
+            held.summary()
+        );
+        let fast = feasibility(&config, &tone).unwrap();
+        assert!(
+            (fast.peak_slew_v_per_s / held.peak_slew_v_per_s - 10.0).abs() < 1e-9,
+            "{}",
+            fast.summary()
+        );
+        // The stage's own period gives the stage's own counts.
+        let own = feasibility_held(&config, &tone, 1.0 / config.sample_rate_hz).unwrap();
+        assert_eq!(own, fast);
+        for bad in [0.0, -1e-3, f64::NAN, f64::INFINITY] {
+            let message = feasibility_held(&config, &tone, bad)
+                .unwrap_err()
+                .to_string();
+            assert!(message.contains("sample period"), "{message}");
+        }
     }
 
     #[test]

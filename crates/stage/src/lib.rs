@@ -45,7 +45,7 @@ pub use config::{
     HysteresisModel, MechanicsConfig, MpimConfig, PreisachConfig, SensorConfig, StageConfig,
 };
 pub use error::StageError;
-pub use feasibility::{Feasibility, feasibility};
+pub use feasibility::{Feasibility, feasibility, feasibility_held};
 pub use hysteresis::{
     BoucWenHysteresis, Hysteresis, MpimHysteresis, PreisachHysteresis, RateIndependentHysteresis,
 };

@@ -254,8 +254,12 @@ pub fn run(args: &Args, ctx: Context) -> Result<(), CliError> {
                 (lo.min(v), hi.max(v))
             }),
         preview: p,
-        feasibility: hystcomp_stage::feasibility(&stage, &control)
-            .map_err(|e| CliError::input(e.to_string()))?,
+        feasibility: hystcomp_stage::feasibility_held(
+            &stage,
+            &control,
+            drive_period_s(time, &stage),
+        )
+        .map_err(|e| CliError::input(e.to_string()))?,
     };
     if ctx.json {
         crate::print_json(&report)?;
@@ -305,6 +309,19 @@ pub fn run(args: &Args, ctx: Context) -> Result<(), CliError> {
              is written either way)",
         );
         Err(CliError::with_code(message, EXIT_SATURATED))
+    }
+}
+
+/// How long each drive sample is held, s: the trajectory's mean time step (its time column,
+/// in seconds), or the stage's own period for a trajectory of fewer than two samples. The
+/// feasibility check holds each drive sample for this long, as a DAC updated at the
+/// trajectory's rate does.
+fn drive_period_s(time: &[f64], stage: &hystcomp_stage::StageConfig) -> f64 {
+    match (time.first(), time.last()) {
+        (Some(first), Some(last)) if time.len() >= 2 && last > first => {
+            (last - first) / (time.len() - 1) as f64
+        }
+        _ => 1.0 / stage.sample_rate_hz,
     }
 }
 
