@@ -344,7 +344,7 @@ impl<T: Real, B: Buffer<T>> PlayBank<T, B> {
             let end = equation.input_at_control(v_max, segment.alpha, segment.beta);
             let f_end = equation.residual(end, segment.alpha, segment.beta);
             if f_end < -equation.rounding(end, segment.alpha, segment.beta) {
-                return found(end, true, segment);
+                return found(end.max(lo), true, segment);
             }
             found(root(lo, end, f_lo, f_end, &segment), false, segment)
         } else {
@@ -370,7 +370,7 @@ impl<T: Real, B: Buffer<T>> PlayBank<T, B> {
             let end = equation.input_at_control(v_min, segment.alpha, segment.beta);
             let f_end = equation.residual(end, segment.alpha, segment.beta);
             if f_end > equation.rounding(end, segment.alpha, segment.beta) {
-                return found(end, true, segment);
+                return found(end.min(hi), true, segment);
             }
             found(root(end, hi, f_end, f_hi, &segment), false, segment)
         }

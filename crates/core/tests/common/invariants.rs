@@ -37,7 +37,7 @@ pub type Violation = String;
 /// The relative tolerance of `P[v] = y_d` for exact modes in `T`.
 fn tolerance<T: Real>() -> f64 {
     // 1e-9 in f64, about 1e-3 in f32 (the solves stop at a few ulps of the branch).
-    (T::epsilon().to_f64() * 1e7).max(1e-9)
+    (T::epsilon().to_f64() * 1e4).max(1e-9)
 }
 
 /// Checks the output of one sample against the limits and the non-finite rule; returns
