@@ -581,6 +581,7 @@ fn a_closed_stdout_ends_every_command_quietly() {
         ],
         vec!["simulate", "--drive", "volts.csv", "-o", "response.csv"],
         vec!["bench", "--samples", "100", "--repeats", "1"],
+        vec!["signal", "paper", "-o", "paper.csv"],
     ]
     .into_iter()
     .map(|args| args.into_iter().map(str::to_owned).collect())
