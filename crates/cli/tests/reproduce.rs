@@ -49,6 +49,53 @@ fn reproduce_prints_table3_writes_the_report_and_honours_json() {
     let file: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(out.join("study.json")).unwrap()).unwrap();
     assert_eq!(file["pipelines"], json["pipelines"]);
+    // Beyond the paper (issue 11): the full pipeline, the duration and speed studies and the
+    // issue's targets, each a section with its figures and tables in the report, and the same
+    // numbers in --json.
+    let beyond = &json["beyond"];
+    assert_eq!(beyond["full"]["runs"].as_array().unwrap().len(), 3);
+    assert_eq!(beyond["duration"]["series"].as_array().unwrap().len(), 4);
+    assert_eq!(beyond["duration"]["hold"].as_array().unwrap().len(), 4);
+    assert_eq!(beyond["speed"]["paper"].as_array().unwrap().len(), 7);
+    assert_eq!(beyond["speed"]["raster"].as_array().unwrap().len(), 5);
+    assert_eq!(beyond["checks"].as_array().unwrap().len(), 10);
+    let html = std::fs::read_to_string(out.join("index.html")).unwrap();
+    for id in [
+        "full-pipeline",
+        "full-indices",
+        "full-contributions-plant",
+        "full-contributions-inverse",
+        "duration",
+        "duration-table",
+        "speed",
+        "speed-paper",
+        "speed-raster",
+        "speed-raster-strong",
+        "issue-11-targets",
+    ] {
+        assert!(
+            html.contains(&format!("id=\"{id}\"")),
+            "no {id} in the report"
+        );
+    }
+    for stem in [
+        "figS_full_ihc",
+        "figS_full_errors",
+        "figS_duration",
+        "figS_hold",
+        "figS_speed_paper",
+        "figS_speed_raster",
+    ] {
+        assert!(out.join(format!("{stem}.png")).is_file(), "{stem}");
+        assert!(html.contains(&format!("{stem}.png")), "{stem} not shown");
+    }
+    // The report's numbers are the JSON's: the full IHC's e_rms and the first check's value.
+    let e_rms = beyond["full"]["runs"][0][1]["e_rms_percent"]
+        .as_f64()
+        .unwrap();
+    assert!(html.contains(&format!("{e_rms:.3} %")), "{e_rms}");
+    let first = beyond["checks"][0]["value"].as_f64().unwrap();
+    assert!(html.contains(&format!("{first:.3}")), "{first}");
 }
 
 #[test]

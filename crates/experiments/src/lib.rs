@@ -10,6 +10,7 @@
 #![warn(missing_docs)]
 
 pub mod beyond;
+mod beyond_report;
 pub mod chain_excitation;
 pub mod duration;
 pub mod excitation;

@@ -1434,7 +1434,7 @@ pub fn write_outputs(
     }
     let FigureLog {
         entries,
-        files: figures,
+        files: mut figures,
         ..
     } = log;
     observer.end();
@@ -1475,6 +1475,11 @@ pub fn write_outputs(
         serde_json::to_string_pretty(&summary).map_err(|e| OutputError::Io(e.to_string()))?;
     write_atomic(&summary_path, format!("{json}\n").as_bytes())
         .map_err(|e| OutputError::Io(e.to_string()))?;
+
+    // Beyond the paper: the full pipeline, the duration and speed studies, issue 11's targets.
+    let (beyond_sections, beyond_figures) =
+        crate::beyond_report::beyond_sections(study, &summary.beyond, dir)?;
+    figures.extend(beyond_figures);
 
     // The report.
     let times = study.identification_times_s;
@@ -1587,7 +1592,10 @@ pub fn write_outputs(
         )],
         acceptance: acceptance_bounds(),
         figures: entries,
-        sections: explanations(study),
+        sections: explanations(study)
+            .into_iter()
+            .chain(beyond_sections)
+            .collect(),
         stage_config_toml: study.options.stage.to_toml_string(),
     };
     let report = write_report(dir, &data).map_err(OutputError::Report)?;
