@@ -17,6 +17,13 @@
 #include <stdint.h>
 
 /**
+ * Flag of `hystcomp_compensator_from_model_file_with`: build a plain delayed method even when
+ * its loop gain over the limits is 1 or more (it may then ring between the limits; the output
+ * still never leaves them).
+ */
+#define HYSTCOMP_ALLOW_UNSTABLE_DELAY 1
+
+/**
  * The most play operators `hystcomp_identify` accepts (`operators`, or `threshold_count`).
  */
 #define HYSTCOMP_MAX_OPERATORS 1000
@@ -64,8 +71,7 @@ typedef enum HystcompStatus {
     HYSTCOMP_STATUS_INVALID_ARGUMENT = 2,
     /**
      * The model cannot be inverted (or used by this method) over the given range: a branch
-     * slope is not positive, the PI part has no eq. (7) inverse, `a2 <= 0` for WIHC, or the
-     * delayed WIHC would diverge.
+     * slope is not positive, the PI part has no eq. (7) inverse, or `a2 <= 0` for WIHC.
      */
     HYSTCOMP_STATUS_NOT_INVERTIBLE = 3,
     /**
@@ -101,12 +107,20 @@ typedef enum HystcompStatus {
      * the fit's RMS error exceeds its limit. The message says what to change.
      */
     HYSTCOMP_STATUS_IDENTIFICATION_FAILED = 9,
+    /**
+     * A plain one-sample-delayed method (`ihc-delayed`, `wihc-delayed`) was asked for on a
+     * model whose delayed loop gain over the limits is 1 or more, so the loop can oscillate
+     * between the limits. Use the exact method, the guarded one (`ihc-guarded`,
+     * `wihc-guarded`), or pass `HYSTCOMP_ALLOW_UNSTABLE_DELAY` to
+     * `hystcomp_compensator_from_model_file_with`.
+     */
+    HYSTCOMP_STATUS_UNSTABLE_DELAY = 10,
 } HystcompStatus;
 
 /**
  * The compensation methods, for `hystcomp_compensator_from_parameters` (passed as an `int`).
  * The model file constructor takes the same methods by name: `"ihc"`, `"ihc-delayed"`,
- * `"wihc"`, `"wihc-delayed"`, `"dihc"`.
+ * `"wihc"`, `"wihc-delayed"`, `"dihc"`, `"ihc-guarded"`, `"wihc-guarded"`.
  */
 typedef enum HystcompMethod {
     /**
@@ -114,7 +128,8 @@ typedef enum HystcompMethod {
      */
     HYSTCOMP_METHOD_IHC = 0,
     /**
-     * IHC with `v(t - Ts)` in the cubic term (real-time Simulink style).
+     * IHC with `v(t - Ts)` in the cubic term (real-time Simulink style); refused with
+     * `HYSTCOMP_STATUS_UNSTABLE_DELAY` when its loop gain over the limits is 1 or more.
      */
     HYSTCOMP_METHOD_IHC_DELAYED = 1,
     /**
@@ -122,13 +137,22 @@ typedef enum HystcompMethod {
      */
     HYSTCOMP_METHOD_WIHC = 2,
     /**
-     * WIHC with `H[v](t - Ts)` (real-time Simulink style).
+     * WIHC with `H[v](t - Ts)` (real-time Simulink style); refused with
+     * `HYSTCOMP_STATUS_UNSTABLE_DELAY` when its loop gain over the limits is 1 or more.
      */
     HYSTCOMP_METHOD_WIHC_DELAYED = 3,
     /**
      * DIHC, eq. (10): an inverse model evaluated on the desired trajectory.
      */
     HYSTCOMP_METHOD_DIHC = 4,
+    /**
+     * The delayed IHC with its guard (an under-relaxed update): never oscillates.
+     */
+    HYSTCOMP_METHOD_IHC_GUARDED = 5,
+    /**
+     * The delayed WIHC with its guard (an under-relaxed update): never oscillates.
+     */
+    HYSTCOMP_METHOD_WIHC_GUARDED = 6,
 } HystcompMethod;
 
 /**
@@ -652,15 +676,17 @@ int hystcomp_compensator_preview(const struct HystcompCompensator *h, size_t *sa
  * (e.g. um), drive voltage out (e.g. V).
  *
  * - `path`: the JSON model file (e.g. `models/table1-plant.json`).
- * - `method`: `"ihc"`, `"ihc-delayed"`, `"wihc"`, `"wihc-delayed"` (plant models) or `"dihc"`
- *   (inverse models), case-insensitive.
+ * - `method`: `"ihc"`, `"ihc-delayed"`, `"wihc"`, `"wihc-delayed"`, `"ihc-guarded"`,
+ *   `"wihc-guarded"` (plant models) or `"dihc"` (inverse models), case-insensitive.
  * - `v_min`, `v_max`, `use_limits`: with `use_limits != 0`, the drive limits in the model's
  *   voltage unit (finite, `v_min < v_max`); with `use_limits == 0` they are ignored and the
  *   range the model was identified on is used.
  * - `out`: receives the handle (NULL on failure). Free it with `hystcomp_compensator_free`.
  *
  * Fails with `NULL_POINTER`, `INVALID_ARGUMENT` (unknown method, limits), `IO` (missing
- * file), `INVALID_MODEL_FILE`, `WRONG_DIRECTION` or `NOT_INVERTIBLE` (over the limits).
+ * file), `INVALID_MODEL_FILE`, `WRONG_DIRECTION`, `NOT_INVERTIBLE` (over the limits) or
+ * `UNSTABLE_DELAY` (a plain delayed method whose loop can oscillate; see
+ * `hystcomp_compensator_from_model_file_with`).
  *
  * # Safety
  * `path` and `method` must be NUL-terminated strings or NULL; `out` must be valid for one
@@ -672,6 +698,24 @@ int hystcomp_compensator_from_model_file(const char *path,
                                          double v_max,
                                          int use_limits,
                                          struct HystcompCompensator **out);
+
+/**
+ * As `hystcomp_compensator_from_model_file`, with `flags`: 0, or
+ * `HYSTCOMP_ALLOW_UNSTABLE_DELAY` to build a plain delayed method (`ihc-delayed`,
+ * `wihc-delayed`) even when its loop gain over the limits is 1 or more (the explicit
+ * override: the drive still never leaves the limits, but may ring between them after a jump
+ * in the desired position). Other flag bits are refused with `INVALID_ARGUMENT`.
+ *
+ * # Safety
+ * As `hystcomp_compensator_from_model_file`.
+ */
+int hystcomp_compensator_from_model_file_with(const char *path,
+                                              const char *method,
+                                              double v_min,
+                                              double v_max,
+                                              int use_limits,
+                                              int flags,
+                                              struct HystcompCompensator **out);
 
 /**
  * Creates a compensator from MPIM parameters in **normalised** units (eq. (4), eq. (11)):
@@ -778,11 +822,13 @@ int hystcomp_compensator_loop_saturated(const struct HystcompCompensator *h,
                                         uint64_t *loop_saturated);
 
 /**
- * Writes the worst-case loop gain of the delayed WIHC over the drive limits,
- * `max |3 a1 x^2 + b_1 + ... + b_k| / a2` (eq. (9) with `H[v](t - Ts)`), for a compensator of
- * method `wihc` or `wihc-delayed`. At or above 1 the delayed loop can ring between the limits
- * after a jump in the desired position; prefer `wihc` then (Table 1 of the paper: 1.66).
- * Other methods: `HYSTCOMP_STATUS_INVALID_ARGUMENT`.
+ * Writes the worst-case gain of the one-sample-delayed loop of the compensator's family over
+ * the drive limits, whatever its own mode: for the IHC methods
+ * `max |3 a1 x^2| / (a2 + b_1 + ... + b_k)` (eq. (5) with `v(t - Ts)`; Table 1 of the paper:
+ * 0.68), for the WIHC methods `max |3 a1 x^2 + b_1 + ... + b_k| / a2` (eq. (9) with
+ * `H[v](t - Ts)`; Table 1: 1.66). At or above 1 the plain delayed loop can ring between the
+ * limits after a jump in the desired position (and is refused unless allowed); the exact and
+ * guarded methods do not. DIHC: `HYSTCOMP_STATUS_INVALID_ARGUMENT`.
  *
  * # Safety
  * `h` must be a live handle or NULL; `gain` valid for one write (NULL is refused).

@@ -44,8 +44,8 @@ pub(crate) fn core_status(e: &CoreError) -> HystcompStatus {
     match e {
         CoreError::NotInvertible { .. }
         | CoreError::PiPartNotInvertible { .. }
-        | CoreError::DelayedWihcUnstable { .. }
         | CoreError::NonPositiveA2 { .. } => HystcompStatus::NotInvertible,
+        CoreError::DelayedLoopUnstable { .. } => HystcompStatus::UnstableDelay,
         _ => HystcompStatus::InvalidArgument,
     }
 }

@@ -3,10 +3,10 @@
 use std::ffi::{c_char, c_int};
 use std::panic::{AssertUnwindSafe, catch_unwind};
 
-use hystcomp_io::compensator::{Method, ScaledCompensator};
+use hystcomp_io::compensator::{Method, ScaledCompensator, UnstableDelay};
 use hystcomp_io::model_file::{Direction, ModelFile, ModelFileError};
 
-use crate::HystcompStatus;
+use crate::{HYSTCOMP_ALLOW_UNSTABLE_DELAY, HystcompStatus};
 use crate::args::{
     clear_out, handle, non_finite_failure, normalised_scale, parameters, path_arg, run_signal,
     str_arg, write_out,
@@ -26,15 +26,17 @@ pub struct HystcompCompensator {
 /// (e.g. um), drive voltage out (e.g. V).
 ///
 /// - `path`: the JSON model file (e.g. `models/table1-plant.json`).
-/// - `method`: `"ihc"`, `"ihc-delayed"`, `"wihc"`, `"wihc-delayed"` (plant models) or `"dihc"`
-///   (inverse models), case-insensitive.
+/// - `method`: `"ihc"`, `"ihc-delayed"`, `"wihc"`, `"wihc-delayed"`, `"ihc-guarded"`,
+///   `"wihc-guarded"` (plant models) or `"dihc"` (inverse models), case-insensitive.
 /// - `v_min`, `v_max`, `use_limits`: with `use_limits != 0`, the drive limits in the model's
 ///   voltage unit (finite, `v_min < v_max`); with `use_limits == 0` they are ignored and the
 ///   range the model was identified on is used.
 /// - `out`: receives the handle (NULL on failure). Free it with `hystcomp_compensator_free`.
 ///
 /// Fails with `NULL_POINTER`, `INVALID_ARGUMENT` (unknown method, limits), `IO` (missing
-/// file), `INVALID_MODEL_FILE`, `WRONG_DIRECTION` or `NOT_INVERTIBLE` (over the limits).
+/// file), `INVALID_MODEL_FILE`, `WRONG_DIRECTION`, `NOT_INVERTIBLE` (over the limits) or
+/// `UNSTABLE_DELAY` (a plain delayed method whose loop can oscillate; see
+/// `hystcomp_compensator_from_model_file_with`).
 ///
 /// # Safety
 /// `path` and `method` must be NUL-terminated strings or NULL; `out` must be valid for one
@@ -48,21 +50,57 @@ pub unsafe extern "C" fn hystcomp_compensator_from_model_file(
     use_limits: c_int,
     out: *mut *mut HystcompCompensator,
 ) -> c_int {
+    // SAFETY: the same contract.
+    unsafe {
+        hystcomp_compensator_from_model_file_with(path, method, v_min, v_max, use_limits, 0, out)
+    }
+}
+
+/// As `hystcomp_compensator_from_model_file`, with `flags`: 0, or
+/// `HYSTCOMP_ALLOW_UNSTABLE_DELAY` to build a plain delayed method (`ihc-delayed`,
+/// `wihc-delayed`) even when its loop gain over the limits is 1 or more (the explicit
+/// override: the drive still never leaves the limits, but may ring between them after a jump
+/// in the desired position). Other flag bits are refused with `INVALID_ARGUMENT`.
+///
+/// # Safety
+/// As `hystcomp_compensator_from_model_file`.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn hystcomp_compensator_from_model_file_with(
+    path: *const c_char,
+    method: *const c_char,
+    v_min: f64,
+    v_max: f64,
+    use_limits: c_int,
+    flags: c_int,
+    out: *mut *mut HystcompCompensator,
+) -> c_int {
     boundary(|| {
         // SAFETY: `out` is valid or NULL (the caller's contract).
         unsafe { clear_out(out) }?;
+        let unstable = unstable_delay(flags)?;
         // SAFETY: NUL-terminated or NULL (the caller's contract).
         let path = unsafe { path_arg(path, "path") }?;
         // SAFETY: NUL-terminated or NULL (the caller's contract).
         let method: Method = unsafe { str_arg(method, "method") }?.parse()?;
         let file = ModelFile::load(&path)?;
         let limits = (use_limits != 0).then_some((v_min, v_max));
-        let inner = ScaledCompensator::new(&file, method, limits)?;
+        let inner = ScaledCompensator::with_unstable_delay(&file, method, limits, unstable)?;
         let boxed = Box::into_raw(Box::new(HystcompCompensator { inner }));
         // SAFETY: `out` was checked non-NULL by `clear_out` and is valid for a write.
         unsafe { out.write(boxed) };
         Ok(())
     })
+}
+
+/// The override the flags ask for.
+fn unstable_delay(flags: c_int) -> Result<UnstableDelay, Failure> {
+    match flags {
+        0 => Ok(UnstableDelay::Refuse),
+        HYSTCOMP_ALLOW_UNSTABLE_DELAY => Ok(UnstableDelay::Allow),
+        other => Err(Failure::invalid(format!(
+            "flags {other} are not known; give 0 or HYSTCOMP_ALLOW_UNSTABLE_DELAY (1)"
+        ))),
+    }
 }
 
 /// Creates a compensator from MPIM parameters in **normalised** units (eq. (4), eq. (11)):
@@ -106,7 +144,7 @@ pub unsafe extern "C" fn hystcomp_compensator_from_parameters(
             .ok_or_else(|| {
                 Failure::invalid(format!(
                     "method {method} is not a HystcompMethod (0 = IHC, 1 = IHC delayed, \
-                     2 = WIHC, 3 = WIHC delayed, 4 = DIHC)"
+                     2 = WIHC, 3 = WIHC delayed, 4 = DIHC, 5 = IHC guarded, 6 = WIHC guarded)"
                 ))
             })?;
         let (input, output) = match method.needs() {
@@ -295,11 +333,13 @@ pub unsafe extern "C" fn hystcomp_compensator_loop_saturated(
     })
 }
 
-/// Writes the worst-case loop gain of the delayed WIHC over the drive limits,
-/// `max |3 a1 x^2 + b_1 + ... + b_k| / a2` (eq. (9) with `H[v](t - Ts)`), for a compensator of
-/// method `wihc` or `wihc-delayed`. At or above 1 the delayed loop can ring between the limits
-/// after a jump in the desired position; prefer `wihc` then (Table 1 of the paper: 1.66).
-/// Other methods: `HYSTCOMP_STATUS_INVALID_ARGUMENT`.
+/// Writes the worst-case gain of the one-sample-delayed loop of the compensator's family over
+/// the drive limits, whatever its own mode: for the IHC methods
+/// `max |3 a1 x^2| / (a2 + b_1 + ... + b_k)` (eq. (5) with `v(t - Ts)`; Table 1 of the paper:
+/// 0.68), for the WIHC methods `max |3 a1 x^2 + b_1 + ... + b_k| / a2` (eq. (9) with
+/// `H[v](t - Ts)`; Table 1: 1.66). At or above 1 the plain delayed loop can ring between the
+/// limits after a jump in the desired position (and is refused unless allowed); the exact and
+/// guarded methods do not. DIHC: `HYSTCOMP_STATUS_INVALID_ARGUMENT`.
 ///
 /// # Safety
 /// `h` must be a live handle or NULL; `gain` valid for one write (NULL is refused).
@@ -315,7 +355,7 @@ pub unsafe extern "C" fn hystcomp_compensator_delayed_loop_gain(
             Failure::new(
                 HystcompStatus::InvalidArgument,
                 format!(
-                    "{} has no delayed WIHC loop; the loop gain exists for wihc and wihc-delayed",
+                    "{} has no delayed loop; the loop gain exists for the IHC and WIHC methods",
                     c.inner.method()
                 ),
             )

@@ -28,6 +28,7 @@ pub extern "C" fn hystcomp_status_name(status: c_int) -> *const c_char {
         7 => c"non-finite input sample",
         8 => c"internal error",
         9 => c"identification failed",
+        10 => c"delayed loop can oscillate on this model",
         _ => c"unknown status",
     };
     name.as_ptr()

@@ -95,8 +95,7 @@ pub enum HystcompStatus {
     /// is not UTF-8, a misaligned array.
     InvalidArgument = 2,
     /// The model cannot be inverted (or used by this method) over the given range: a branch
-    /// slope is not positive, the PI part has no eq. (7) inverse, `a2 <= 0` for WIHC, or the
-    /// delayed WIHC would diverge.
+    /// slope is not positive, the PI part has no eq. (7) inverse, or `a2 <= 0` for WIHC.
     NotInvertible = 3,
     /// A file could not be read: missing, a directory, no permission (the message has the
     /// operating system's reason and the path).
@@ -119,24 +118,41 @@ pub enum HystcompStatus {
     /// ill-conditioned, the constraints cannot be met, the swarm found no feasible model, or
     /// the fit's RMS error exceeds its limit. The message says what to change.
     IdentificationFailed = 9,
+    /// A plain one-sample-delayed method (`ihc-delayed`, `wihc-delayed`) was asked for on a
+    /// model whose delayed loop gain over the limits is 1 or more, so the loop can oscillate
+    /// between the limits. Use the exact method, the guarded one (`ihc-guarded`,
+    /// `wihc-guarded`), or pass `HYSTCOMP_ALLOW_UNSTABLE_DELAY` to
+    /// `hystcomp_compensator_from_model_file_with`.
+    UnstableDelay = 10,
 }
+
+/// Flag of `hystcomp_compensator_from_model_file_with`: build a plain delayed method even when
+/// its loop gain over the limits is 1 or more (it may then ring between the limits; the output
+/// still never leaves them).
+pub const HYSTCOMP_ALLOW_UNSTABLE_DELAY: std::ffi::c_int = 1;
 
 /// The compensation methods, for `hystcomp_compensator_from_parameters` (passed as an `int`).
 /// The model file constructor takes the same methods by name: `"ihc"`, `"ihc-delayed"`,
-/// `"wihc"`, `"wihc-delayed"`, `"dihc"`.
+/// `"wihc"`, `"wihc-delayed"`, `"dihc"`, `"ihc-guarded"`, `"wihc-guarded"`.
 #[repr(C)]
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum HystcompMethod {
     /// IHC, eqs. (5)-(8): the inverse of a plant model, implicit equation solved exactly.
     Ihc = 0,
-    /// IHC with `v(t - Ts)` in the cubic term (real-time Simulink style).
+    /// IHC with `v(t - Ts)` in the cubic term (real-time Simulink style); refused with
+    /// `HYSTCOMP_STATUS_UNSTABLE_DELAY` when its loop gain over the limits is 1 or more.
     IhcDelayed = 1,
     /// WIHC, eq. (9): a plant model in a multiplicative structure, solved exactly.
     Wihc = 2,
-    /// WIHC with `H[v](t - Ts)` (real-time Simulink style).
+    /// WIHC with `H[v](t - Ts)` (real-time Simulink style); refused with
+    /// `HYSTCOMP_STATUS_UNSTABLE_DELAY` when its loop gain over the limits is 1 or more.
     WihcDelayed = 3,
     /// DIHC, eq. (10): an inverse model evaluated on the desired trajectory.
     Dihc = 4,
+    /// The delayed IHC with its guard (an under-relaxed update): never oscillates.
+    IhcGuarded = 5,
+    /// The delayed WIHC with its guard (an under-relaxed update): never oscillates.
+    WihcGuarded = 6,
 }
 
 /// The Rust example of `docs/microcontroller.md`, compiled and run as a doctest.

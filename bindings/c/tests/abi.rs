@@ -17,19 +17,41 @@ fn from_file(
     method: &str,
     limits: Option<(f64, f64)>,
 ) -> Result<*mut HystcompCompensator, (c_int, String)> {
+    from_file_with(path, method, limits, None)
+}
+
+/// `hystcomp_compensator_from_model_file`, or `..._with(flags)` when `flags` is given.
+fn from_file_with(
+    path: &CStr,
+    method: &str,
+    limits: Option<(f64, f64)>,
+    flags: Option<c_int>,
+) -> Result<*mut HystcompCompensator, (c_int, String)> {
     let method = CString::new(method).unwrap();
     let mut out = std::ptr::dangling_mut::<HystcompCompensator>(); // not NULL: must be cleared on failure
     let (lo, hi) = limits.unwrap_or((0.0, 0.0));
+    let use_limits = c_int::from(limits.is_some());
     // SAFETY: valid strings and out-pointer.
     let status = unsafe {
-        hystcomp_compensator_from_model_file(
-            path.as_ptr(),
-            method.as_ptr(),
-            lo,
-            hi,
-            c_int::from(limits.is_some()),
-            &mut out,
-        )
+        match flags {
+            None => hystcomp_compensator_from_model_file(
+                path.as_ptr(),
+                method.as_ptr(),
+                lo,
+                hi,
+                use_limits,
+                &mut out,
+            ),
+            Some(flags) => hystcomp_compensator_from_model_file_with(
+                path.as_ptr(),
+                method.as_ptr(),
+                lo,
+                hi,
+                use_limits,
+                flags,
+                &mut out,
+            ),
+        }
     };
     if status == OK {
         assert!(!out.is_null());
@@ -97,7 +119,7 @@ fn every_method_builds_from_the_model_files_and_stays_within_limits() {
     for (file, methods) in [
         (
             "table1-plant.json",
-            &["ihc", "IHC-delayed", "wihc", "wihc-delayed"][..],
+            &["ihc", "IHC-delayed", "wihc", "ihc-guarded", "wihc-guarded"][..],
         ),
         ("table2-inverse.json", &["dihc"][..]),
     ] {
@@ -805,9 +827,25 @@ fn the_last_error_is_per_thread() {
 #[test]
 fn delayed_wihc_reports_its_loop_gain_and_counts_its_ringing_apart() {
     let path = model_path("table1-plant.json");
-    let delayed = from_file(&path, "wihc-delayed", None).unwrap();
+    // Table 1's delayed WIHC can ring (loop gain 1.66): refused unless allowed explicitly.
+    let (status, message) = from_file(&path, "wihc-delayed", None).unwrap_err();
+    assert_eq!(status, UNSTABLE_DELAY, "{message}");
+    assert!(
+        message.contains("delayed WIHC can oscillate") && message.contains("1.659"),
+        "{message}"
+    );
+    let (status, message) = from_file_with(&path, "wihc-delayed", None, Some(4)).unwrap_err();
+    assert_eq!(status, INVALID_ARGUMENT, "{message}");
+    let delayed = from_file_with(
+        &path,
+        "wihc-delayed",
+        None,
+        Some(HYSTCOMP_ALLOW_UNSTABLE_DELAY),
+    )
+    .unwrap();
     let exact = from_file(&path, "wihc", None).unwrap();
     let ihc = from_file(&path, "ihc", None).unwrap();
+    let dihc = from_file(&model_path("table2-inverse.json"), "dihc", None).unwrap();
     // (b_1 + ... + b_10) / a2 of Table 1: all ten operators moving near 0 V.
     let expected = TABLE1.weights.iter().sum::<f64>() / TABLE1.a2;
     for h in [delayed, exact] {
@@ -819,14 +857,22 @@ fn delayed_wihc_reports_its_loop_gain_and_counts_its_ringing_apart() {
         );
         assert!((gain - expected).abs() < 1e-12 && gain > 1.0, "{gain}");
     }
+    // IHC's delayed loop: |3 a1 x^2| / (a2 + b_1) at x = 1, 0.68 for Table 1.
     let mut gain = 0.0;
     // SAFETY: a live handle and a valid out-pointer.
     assert_eq!(
         unsafe { hystcomp_compensator_delayed_loop_gain(ihc, &mut gain) },
+        OK
+    );
+    let expected = 3.0 * TABLE1.a1.abs() / (TABLE1.a2 + TABLE1.weights[0]);
+    assert!((gain - expected).abs() < 1e-12, "{gain} vs {expected}");
+    // SAFETY: a live handle and a valid out-pointer.
+    assert_eq!(
+        unsafe { hystcomp_compensator_delayed_loop_gain(dihc, &mut gain) },
         INVALID_ARGUMENT
     );
     assert!(
-        last_error().contains("ihc has no delayed WIHC loop"),
+        last_error().contains("dihc has no delayed loop"),
         "{}",
         last_error()
     );
@@ -873,7 +919,7 @@ fn delayed_wihc_reports_its_loop_gain_and_counts_its_ringing_apart() {
         );
         assert!(last_error().contains("gain is NULL"));
     }
-    for h in [delayed, exact, ihc] {
+    for h in [delayed, exact, ihc, dihc] {
         // SAFETY: live handles, freed once.
         unsafe { hystcomp_compensator_free(h) };
     }

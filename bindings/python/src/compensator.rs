@@ -4,7 +4,7 @@
 use std::path::PathBuf;
 use std::sync::{Mutex, MutexGuard};
 
-use hystcomp_io::compensator::{Method, ScaledCompensator};
+use hystcomp_io::compensator::{Method, ScaledCompensator, UnstableDelay};
 use hystcomp_io::model_file::{Direction, ModelFile as IoModelFile, Scale as IoScale};
 use numpy::PyArray1;
 use pyo3::prelude::*;
@@ -50,15 +50,18 @@ fn check_limits(limits: Option<(f64, f64)>) -> PyResult<()> {
 /// voltage out, in the physical units of its model file (e.g. um in, V out).
 ///
 /// - ``model``: a ``ModelFile`` or the path of one;
-/// - ``method``: ``"ihc"``, ``"ihc-delayed"``, ``"wihc"``, ``"wihc-delayed"`` (plant models) or
-///   ``"dihc"`` (inverse models);
+/// - ``method``: ``"ihc"``, ``"ihc-delayed"``, ``"ihc-guarded"``, ``"wihc"``,
+///   ``"wihc-delayed"``, ``"wihc-guarded"`` (plant models) or ``"dihc"`` (inverse models);
 /// - ``limits``: ``(min, max)`` drive limits in the model's voltage unit; by default the range
-///   the model was identified on.
+///   the model was identified on;
+/// - ``allow_unstable_delay``: build ``"ihc-delayed"`` or ``"wihc-delayed"`` even when its loop
+///   gain over the limits is 1 or more (it can then ring between the limits after a jump); by
+///   default that raises ``UnstableDelayError``. The ``-guarded`` methods never oscillate.
 ///
 /// Every output lies within ``limits`` and is never NaN. ``step`` and ``process`` refuse NaN or
 /// infinite desired positions with ``InvalidValueError`` (state unchanged). Raises
-/// ``WrongDirectionError``, ``NotInvertibleError`` (over the limits), ``InvalidValueError``,
-/// ``ModelFileError`` or ``FileNotFoundError`` when it cannot be built.
+/// ``WrongDirectionError``, ``NotInvertibleError`` (over the limits), ``UnstableDelayError``,
+/// ``InvalidValueError``, ``ModelFileError`` or ``FileNotFoundError`` when it cannot be built.
 #[pyclass(module = "hystcomp", name = "Compensator", subclass, frozen)]
 pub struct Compensator {
     // `ScaledCompensator` is `Send` but not `Sync`; Python objects must be both.
@@ -75,13 +78,24 @@ impl Compensator {
 #[pymethods]
 impl Compensator {
     #[new]
-    #[pyo3(signature = (model, method = "ihc", limits = None))]
-    fn new(model: ModelArg<'_>, method: &str, limits: Option<Vec<f64>>) -> PyResult<Self> {
+    #[pyo3(signature = (model, method = "ihc", limits = None, *, allow_unstable_delay = false))]
+    fn new(
+        model: ModelArg<'_>,
+        method: &str,
+        limits: Option<Vec<f64>>,
+        allow_unstable_delay: bool,
+    ) -> PyResult<Self> {
         let method = parse_method(method)?;
         let limits = limits.map(|l| pair(l, "limits")).transpose()?;
         check_limits(limits)?;
         let file = model.load()?;
-        let inner = ScaledCompensator::new(&file, method, limits).map_err(errors::compensator)?;
+        let inner = ScaledCompensator::with_unstable_delay(
+            &file,
+            method,
+            limits,
+            unstable_delay(allow_unstable_delay),
+        )
+        .map_err(errors::compensator)?;
         Ok(Compensator {
             inner: Mutex::new(inner),
         })
@@ -91,8 +105,13 @@ impl Compensator {
     /// normalised, eq. (11)): a plant model for IHC and WIHC, an inverse model (valid for
     /// desired positions in ``[0, 1]``) for DIHC.
     #[staticmethod]
-    #[pyo3(signature = (model, method = "ihc", limits = vec![0.0, 1.0]))]
-    fn from_mpim(model: &Mpim, method: &str, limits: Vec<f64>) -> PyResult<Self> {
+    #[pyo3(signature = (model, method = "ihc", limits = vec![0.0, 1.0], *, allow_unstable_delay = false))]
+    fn from_mpim(
+        model: &Mpim,
+        method: &str,
+        limits: Vec<f64>,
+        allow_unstable_delay: bool,
+    ) -> PyResult<Self> {
         let method = parse_method(method)?;
         let limits = pair(limits, "limits")?;
         check_limits(Some(limits))?;
@@ -114,8 +133,13 @@ impl Compensator {
             &model.inner,
         )
         .map_err(errors::model_file)?;
-        let inner =
-            ScaledCompensator::new(&file, method, Some(limits)).map_err(errors::compensator)?;
+        let inner = ScaledCompensator::with_unstable_delay(
+            &file,
+            method,
+            Some(limits),
+            unstable_delay(allow_unstable_delay),
+        )
+        .map_err(errors::compensator)?;
         Ok(Compensator {
             inner: Mutex::new(inner),
         })
@@ -157,7 +181,8 @@ impl Compensator {
         self.lock().limits()
     }
 
-    /// The method: ``"ihc"``, ``"ihc-delayed"``, ``"wihc"``, ``"wihc-delayed"`` or ``"dihc"``.
+    /// The method: ``"ihc"``, ``"ihc-delayed"``, ``"ihc-guarded"``, ``"wihc"``,
+    /// ``"wihc-delayed"``, ``"wihc-guarded"`` or ``"dihc"``.
     #[getter]
     fn method(&self) -> &'static str {
         self.lock().method().name()
@@ -196,13 +221,23 @@ impl Compensator {
         crate::model::typed(py, "Diagnostics", data.into_any())
     }
 
-    /// For ``"wihc"`` and ``"wihc-delayed"``: the worst-case loop gain of the delayed WIHC over
-    /// the limits, ``max |3 a1 x^2 + b_1 + ... + b_k| / a2`` (eq. (9) with ``H[v](t - Ts)``). At
-    /// or above 1 the delayed loop can ring between the limits after a jump in the desired
-    /// position; prefer ``"wihc"`` then. ``None`` for the other methods. Table 1: 1.66.
+    /// For the IHC and WIHC methods: the worst-case gain of the family's one-sample-delayed
+    /// loop over the limits, whatever the method's own mode: ``max |3 a1 x^2| / (a2 + b_1 +
+    /// ... + b_k)`` for IHC (Table 1: 0.68), ``max |3 a1 x^2 + b_1 + ... + b_k| / a2`` for WIHC
+    /// (eq. (9) with ``H[v](t - Ts)``; Table 1: 1.66). At or above 1 the plain delayed loop can
+    /// ring between the limits after a jump in the desired position and is refused unless
+    /// ``allow_unstable_delay=True``; the exact and ``-guarded`` methods never oscillate.
+    /// ``None`` for DIHC.
     #[getter]
     fn delayed_loop_gain(&self) -> Option<f64> {
         self.lock().delayed_loop_gain()
+    }
+
+    /// For the IHC and WIHC methods: the under-relaxation of the family's guarded delayed
+    /// loop, in ``(0, 1]`` (1: the guarded loop is the plain one). ``None`` for DIHC.
+    #[getter]
+    fn guard_relaxation(&self) -> Option<f64> {
+        self.lock().guard_relaxation()
     }
 
     fn __repr__(slf: &Bound<'_, Self>) -> PyResult<String> {
@@ -215,5 +250,14 @@ impl Compensator {
             c.control_unit(),
             c.limits()
         ))
+    }
+}
+
+/// The override `allow_unstable_delay` asks for.
+fn unstable_delay(allow: bool) -> UnstableDelay {
+    if allow {
+        UnstableDelay::Allow
+    } else {
+        UnstableDelay::Refuse
     }
 }

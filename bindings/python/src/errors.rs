@@ -27,6 +27,8 @@ pub enum Kind {
     NotInvertible,
     /// `WrongDirectionError(InvalidValueError)`.
     WrongDirection,
+    /// `UnstableDelayError(NotInvertibleError)`.
+    UnstableDelay,
     /// `ModelFileError(HystcompError, ValueError)`.
     ModelFile,
     /// `IdentificationError(HystcompError, ValueError)`.
@@ -41,6 +43,7 @@ impl Kind {
             Kind::InvalidValue => "InvalidValueError",
             Kind::NotInvertible => "NotInvertibleError",
             Kind::WrongDirection => "WrongDirectionError",
+            Kind::UnstableDelay => "UnstableDelayError",
             Kind::ModelFile => "ModelFileError",
             Kind::Identification => "IdentificationError",
             Kind::StageConfig => "StageConfigError",
@@ -84,8 +87,8 @@ fn core_kind(e: &CoreError) -> Kind {
     match e {
         CoreError::NotInvertible { .. }
         | CoreError::PiPartNotInvertible { .. }
-        | CoreError::DelayedWihcUnstable { .. }
         | CoreError::NonPositiveA2 { .. } => Kind::NotInvertible,
+        CoreError::DelayedLoopUnstable { .. } => Kind::UnstableDelay,
         _ => Kind::InvalidValue,
     }
 }

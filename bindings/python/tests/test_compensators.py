@@ -24,9 +24,10 @@ def test_exact_methods_invert_the_plant_model(table1, method):
     assert c.diagnostics == hystcomp.Diagnostics(saturated=0, loop_saturated=0, non_finite=0)
 
 
-@pytest.mark.parametrize("method", ["ihc-delayed", "wihc-delayed"])
+@pytest.mark.parametrize("method", ["ihc-delayed", "wihc-delayed", "ihc-guarded", "wihc-guarded"])
 def test_delayed_methods_lag_but_track(table1, method):
-    volts = hystcomp.Compensator(table1, method).process(DESIRED_UM)
+    # Table 1's plain delayed WIHC can ring (loop gain 1.66): allowed explicitly.
+    volts = hystcomp.Compensator(table1, method, allow_unstable_delay=True).process(DESIRED_UM)
     error = np.abs(table1.predict(volts) - DESIRED_UM)
     # The first samples jump from rest to 35 um with the previous sample's terms; once the
     # loop has settled, the one-sample lag at 1 kHz leaves a small but non-zero error (the
@@ -51,10 +52,12 @@ def test_step_equals_process_and_reset_repeats(table1):
 
 
 @pytest.mark.parametrize(
-    "model, method", [(TABLE1_FILE, m) for m in ["ihc", "ihc-delayed", "wihc", "wihc-delayed"]] + [(TABLE2_FILE, "dihc")]
+    "model, method",
+    [(TABLE1_FILE, m) for m in ["ihc", "ihc-delayed", "wihc", "wihc-delayed", "ihc-guarded", "wihc-guarded"]]
+    + [(TABLE2_FILE, "dihc")],
 )
 def test_outputs_never_leave_the_limits(model, method):
-    c = hystcomp.Compensator(pathlib.Path(model), method, limits=(1.0, 9.0))
+    c = hystcomp.Compensator(pathlib.Path(model), method, limits=(1.0, 9.0), allow_unstable_delay=True)
     wild = 37.5 + 80.0 * np.sin(np.linspace(0, 60, 6000)) ** 3
     volts = c.process(wild)
     assert volts.min() >= 1.0 and volts.max() <= 9.0
@@ -67,8 +70,10 @@ def test_shorthand_classes_are_compensators(table1, table2):
     for c, method in [
         (hystcomp.Ihc(table1), "ihc"),
         (hystcomp.Ihc(table1, delayed=True), "ihc-delayed"),
+        (hystcomp.Ihc(table1, guarded=True), "ihc-guarded"),
         (hystcomp.Wihc(table1, (0.0, 9.0)), "wihc"),
-        (hystcomp.Wihc(table1, delayed=True), "wihc-delayed"),
+        (hystcomp.Wihc(table1, delayed=True, allow_unstable_delay=True), "wihc-delayed"),
+        (hystcomp.Wihc(table1, delayed=True, guarded=True), "wihc-guarded"),
         (hystcomp.Dihc(table2), "dihc"),
     ]:
         assert isinstance(c, hystcomp.Compensator)
@@ -156,14 +161,27 @@ def test_compensators_can_be_used_from_threads(table1):
 def test_delayed_wihc_ringing_on_table1_is_a_loop_saturation(table1):
     t = np.arange(0.0, 1.0, 1e-4)
     desired = 35.0 + 20.0 * np.sin(2 * np.pi * t)  # reachable, from rest: a jump to 35 um
-    delayed = hystcomp.Compensator(table1, "wihc-delayed")
+    # Refused unless allowed: the loop gain is above 1.
+    with pytest.raises(hystcomp.UnstableDelayError, match="delayed WIHC can oscillate"):
+        hystcomp.Compensator(table1, "wihc-delayed")
+    with pytest.raises(hystcomp.UnstableDelayError):
+        hystcomp.Wihc(table1, delayed=True)
+    assert issubclass(hystcomp.UnstableDelayError, hystcomp.NotInvertibleError)
+    delayed = hystcomp.Compensator(table1, "wihc-delayed", allow_unstable_delay=True)
     exact = hystcomp.Compensator(table1, "wihc")
+    guarded = hystcomp.Wihc(table1, guarded=True)
     gain = delayed.delayed_loop_gain
-    assert gain == exact.delayed_loop_gain
+    assert gain == exact.delayed_loop_gain == guarded.delayed_loop_gain
     # (b_1 + ... + b_10) / a2 of Table 1: all ten operators moving near 0 V.
     assert gain == pytest.approx(sum(table1.weights) / table1.a2, rel=1e-12)
     assert gain > 1.0
-    assert hystcomp.Compensator(table1, "ihc").delayed_loop_gain is None
+    assert guarded.guard_relaxation == pytest.approx(1.0 / (1.0 + gain), rel=1e-12)
+    # IHC's delayed loop: |3 a1 x^2| / (a2 + b_1) at x = 1.
+    ihc_gain = 3.0 * abs(table1.a1) / (table1.a2 + table1.weights[0])
+    assert hystcomp.Compensator(table1, "ihc").delayed_loop_gain == pytest.approx(ihc_gain, rel=1e-12)
+    assert hystcomp.Dihc(hystcomp.ModelFile.load(TABLE2_FILE)).delayed_loop_gain is None
+    guarded.process(desired)
+    assert guarded.diagnostics == {"saturated": 0, "loop_saturated": 0, "non_finite": 0}
     volts = delayed.process(desired)
     assert volts.min() >= 0.0 and volts.max() <= 10.0
     d = delayed.diagnostics

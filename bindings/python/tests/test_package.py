@@ -46,11 +46,12 @@ def test_every_public_object_has_a_docstring():
 
 
 def test_exception_hierarchy():
-    for name in ("InvalidValueError", "NotInvertibleError", "WrongDirectionError", "ModelFileError", "IdentificationError", "StageConfigError"):
+    for name in ("InvalidValueError", "NotInvertibleError", "UnstableDelayError", "WrongDirectionError", "ModelFileError", "IdentificationError", "StageConfigError"):
         cls = getattr(hystcomp, name)
         assert issubclass(cls, hystcomp.HystcompError) and issubclass(cls, ValueError), name
         assert cls.__module__ == "hystcomp"
     assert issubclass(hystcomp.NotInvertibleError, hystcomp.InvalidValueError)
+    assert issubclass(hystcomp.UnstableDelayError, hystcomp.NotInvertibleError)
     assert hystcomp.__version__.count(".") == 2
 
 

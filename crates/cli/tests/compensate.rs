@@ -48,22 +48,30 @@ fn every_method_writes_the_drive_and_exact_ones_recover_the_voltage() {
     for (method, model) in [
         ("ihc", "table1-plant.json"),
         ("ihc-delayed", "table1-plant.json"),
+        ("ihc-guarded", "table1-plant.json"),
         ("wihc", "table1-plant.json"),
         ("wihc-delayed", "table1-plant.json"),
+        ("wihc-guarded", "table1-plant.json"),
         ("dihc", "table2-inverse.json"),
     ] {
         let out = dir.path().join(format!("{method}.csv"));
-        let o = hystcomp(&[
+        let model = models().join(model);
+        let mut args = vec![
             "compensate",
             "--model",
-            s(&models().join(model)),
+            s(&model),
             "--method",
             method,
             "--desired",
             s(&trajectory),
             "-o",
             s(&out),
-        ]);
+        ];
+        // Table 1's delayed WIHC can ring (loop gain 1.66): it runs only when allowed.
+        if method == "wihc-delayed" {
+            args.push("--allow-unstable-delay");
+        }
+        let o = hystcomp(&args);
         assert!(o.status.success(), "{method}: {}", stderr(&o));
         let cols = read(&out);
         assert_eq!(cols[0].len(), 2000);
@@ -225,8 +233,8 @@ fn delayed_wihc_ringing_is_reported_as_such_not_as_unreachable_positions() {
     let trajectory = sine_from_rest(dir.path());
     let model = models().join("table1-plant.json");
     let out = dir.path().join("drive.csv");
-    let run = |method: &str| {
-        hystcomp(&[
+    let run_with = |method: &str, extra: &[&str]| {
+        let mut args = vec![
             "compensate",
             "--model",
             s(&model),
@@ -237,8 +245,11 @@ fn delayed_wihc_ringing_is_reported_as_such_not_as_unreachable_positions() {
             "-o",
             s(&out),
             "--json",
-        ])
+        ];
+        args.extend_from_slice(extra);
+        hystcomp(&args)
     };
+    let run = |method: &str| run_with(method, &[]);
     // The exact WIHC reaches every sample: nothing clamped, exit 0.
     let o = run("wihc");
     assert!(o.status.success(), "{}", stderr(&o));
@@ -248,8 +259,32 @@ fn delayed_wihc_ringing_is_reported_as_such_not_as_unreachable_positions() {
     assert_eq!(report["saturated"], 0, "{report}");
     let gain = report["delayed_loop_gain"].as_f64().unwrap();
     assert!(gain >= 1.0, "Table 1's delayed loop gain {gain}");
-    // The delayed WIHC rings between 0 and 10 V after the jump: a loop saturation.
+    // The plain delayed WIHC is refused, naming the flag, the exact and the guarded methods;
+    // no drive file is written.
+    std::fs::remove_file(&out).unwrap();
     let o = run("wihc-delayed");
+    let message = stderr(&o);
+    assert_eq!(o.status.code(), Some(1), "{message}");
+    for part in [
+        "delayed WIHC can oscillate",
+        &format!("{gain:.4}"),
+        "--allow-unstable-delay",
+        "--method wihc-guarded",
+        "--method wihc ",
+    ] {
+        assert!(message.contains(part), "{part}: {message}");
+    }
+    assert!(!out.exists());
+    // The guarded loop follows without ringing.
+    let o = run("wihc-guarded");
+    assert!(o.status.success(), "{}", stderr(&o));
+    let report: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert_eq!(report["saturated"], 0, "{report}");
+    let relaxation = report["guard_relaxation"].as_f64().unwrap();
+    assert!((relaxation - 1.0 / (1.0 + gain)).abs() < 1e-9, "{report}");
+    // Allowed explicitly, the delayed WIHC rings between 0 and 10 V after the jump: a loop
+    // saturation.
+    let o = run_with("wihc-delayed", &["--allow-unstable-delay"]);
     let message = stderr(&o);
     assert_eq!(o.status.code(), Some(4), "{message}");
     let report: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
@@ -264,7 +299,7 @@ fn delayed_wihc_ringing_is_reported_as_such_not_as_unreachable_positions() {
         "{message}"
     );
     assert!(
-        message.contains("warning: the delayed WIHC's loop gain"),
+        message.contains("warning: --allow-unstable-delay: the wihc-delayed loop gain"),
         "{message}"
     );
     assert!(message.contains("--method wihc"), "{message}");
@@ -372,8 +407,10 @@ fn bench_reports_every_compensator_for_10_and_100_operators() {
         "mpim-chained",
         "ihc",
         "ihc-delayed",
+        "ihc-guarded",
         "wihc",
         "wihc-delayed",
+        "wihc-guarded",
         "dihc",
         "creep-inverse",
         "vibration-inverse",
@@ -397,8 +434,8 @@ fn bench_reports_every_compensator_for_10_and_100_operators() {
             }
         }
     }
-    // Exactly those: 10 kinds x 2 sizes x 2 precisions, no figure twice.
-    assert_eq!(figures.len(), 10 * 2 * 2, "{report}");
+    // Exactly those: 12 kinds x 2 sizes x 2 precisions, no figure twice.
+    assert_eq!(figures.len(), 12 * 2 * 2, "{report}");
     assert_eq!(report["samples"], 2000);
     assert_eq!(report["repeats"], 3);
     let o = hystcomp(&["bench", "--samples", "10"]);
@@ -442,10 +479,12 @@ fn bench_times_a_model_file_too() {
         [
             "ihc",
             "ihc-delayed",
+            "ihc-guarded",
             "mpim-chained",
             "mpim-forward",
             "wihc",
-            "wihc-delayed"
+            "wihc-delayed",
+            "wihc-guarded"
         ]
     );
     assert_eq!(figures_for(&inverse), ["dihc"]);

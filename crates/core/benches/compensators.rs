@@ -87,12 +87,27 @@ fn bench_type<T: Real>(c: &mut Criterion, type_name: &str) {
                 Box::new(Ihc::<T, Vec<T>>::new(&model, limits, SolveMode::Delayed).unwrap()),
             ),
             (
+                "ihc_guarded",
+                Box::new(Ihc::<T, Vec<T>>::new(&model, limits, SolveMode::DelayedGuarded).unwrap()),
+            ),
+            (
                 "wihc_exact",
                 Box::new(Wihc::<T, Vec<T>>::new(&model, limits, SolveMode::Exact).unwrap()),
             ),
             (
+                // Table 1's delayed WIHC loop gain is 1.66: allowed explicitly (the trajectory
+                // rises from rest, so it does not ring).
                 "wihc_delayed",
-                Box::new(Wihc::<T, Vec<T>>::new(&model, limits, SolveMode::Delayed).unwrap()),
+                Box::new(
+                    Wihc::<T, Vec<T>>::new(&model, limits, SolveMode::DelayedAllowUnstable)
+                        .unwrap(),
+                ),
+            ),
+            (
+                "wihc_guarded",
+                Box::new(
+                    Wihc::<T, Vec<T>>::new(&model, limits, SolveMode::DelayedGuarded).unwrap(),
+                ),
             ),
             (
                 "dihc",

@@ -55,15 +55,43 @@ impl<T: Real> OutputLimits<T> {
 }
 
 /// How an implicit control law is solved each sample.
+///
+/// The three delayed modes break the implicit loop with the previous sample, as real-time
+/// implementations do; they differ in how they treat a model on which that loop can oscillate
+/// (loop gain of 1 or more, see [`crate::LoopGain`]): [`SolveMode::Delayed`] refuses it,
+/// [`SolveMode::DelayedGuarded`] cannot oscillate on any model, and
+/// [`SolveMode::DelayedAllowUnstable`] runs it anyway, an override that must be spelled out.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
 pub enum SolveMode {
     /// The exact per-sample solution of the implicit equation (ERRATA item 4): a bracketed
-    /// scalar solve on the piecewise-cubic branch, so that `P[v](t) = y_d(t)` to machine
+    /// scalar solve on the piecewise-polynomial branch, so that `P[v](t) = y_d(t)` to machine
     /// precision when `y_d` is reachable.
     Exact,
     /// The loop broken with the previous sample, as real-time Simulink implementations do:
-    /// `v(t - Ts)` in the cubic term of IHC, `H[v](t - Ts)` in WIHC. Lags by one sample.
+    /// `v(t - Ts)` in the cubic term of IHC, `H[v](t - Ts)` in WIHC. Lags by one sample. The
+    /// constructors refuse a model whose delayed loop gain over the output limits is 1 or more
+    /// ([`crate::CoreError::DelayedLoopUnstable`]): below 1 the loop settles after any jump in
+    /// `y_d`.
     Delayed,
+    /// The delayed loop with a guard that makes it unable to oscillate, whatever the model: an
+    /// under-relaxed update (see [`crate::Ihc`] and [`crate::Wihc`] for the law and the proof
+    /// sketch). While `y_d` holds, the model's output approaches it from one side, never
+    /// passing it, so the drive moves monotonically and never rings. On models whose delayed
+    /// loop already approaches monotonically (the paper's Table 1 for IHC) it is the plain
+    /// delayed loop; otherwise it lags a little more.
+    DelayedGuarded,
+    /// The plain delayed loop without the loop-gain check: the explicit override for a model
+    /// whose delayed loop can oscillate (gain of 1 or more). The outputs still never leave the
+    /// limits or become NaN, but the loop may ring between the limits after a jump in `y_d`
+    /// (counted in [`Diagnostics::loop_saturated`]).
+    DelayedAllowUnstable,
+}
+
+impl SolveMode {
+    /// `true` for the three one-sample-delayed modes.
+    pub fn is_delayed(self) -> bool {
+        self != SolveMode::Exact
+    }
 }
 
 /// What a compensator had to do besides its control law, counted since the last reset.
@@ -79,7 +107,7 @@ pub struct Diagnostics {
     pub saturated: u64,
     /// Samples where the output was clamped to a limit although the desired position was
     /// reachable within the limits from the plant model's current state: only the delayed
-    /// loops ([`SolveMode::Delayed`]) do this, when they lag or ring after a jump in `y_d`
+    /// loops ([`SolveMode::Delayed`], [`SolveMode::DelayedAllowUnstable`]) do this, when they lag or ring after a jump in `y_d`
     /// (see [`crate::Wihc`]). The exact solves never do.
     pub loop_saturated: u64,
     /// Samples whose desired position was NaN or infinite: the previous output was held.

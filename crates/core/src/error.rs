@@ -75,13 +75,29 @@ pub enum CoreError {
         /// The value of `a2 + b_1 + ... + b_k`.
         slope: f64,
     },
-    /// The delayed WIHC, `v(t) = (y_d(t) - H[v](t - Ts)) / a2`, is an iteration that diverges
-    /// when `|3 a1 x^2 + sum_{r_i = 0} b_i| >= a2` somewhere in the range.
-    DelayedWihcUnstable {
-        /// The largest ratio `|3 a1 x^2 + sum_{r_i = 0} b_i| / a2` found (must stay below 1).
-        ratio: f64,
-        /// The input where it occurs.
+    /// A one-sample-delayed loop (IHC: `w(t) = y_d(t) - h(v(t - Ts))`; WIHC:
+    /// `v(t) = (y_d(t) - H[v](t - Ts)) / a2`) has a loop gain of 1 or more on some branch
+    /// reachable within the output limits, so it can ring between the limits (see
+    /// [`crate::LoopGain`]). Refused unless [`crate::SolveMode::DelayedAllowUnstable`] asks for it
+    /// explicitly; [`crate::SolveMode::DelayedGuarded`] and [`crate::SolveMode::Exact`] never
+    /// oscillate.
+    DelayedLoopUnstable {
+        /// `"IHC"` or `"WIHC"`.
+        compensator: &'static str,
+        /// The largest loop gain found (must stay below 1).
+        gain: f64,
+        /// The (normalised) input where it occurs.
         input: f64,
+        /// How many operators (the first ones by threshold) are moving there.
+        active_operators: usize,
+    },
+    /// The input polynomial `g(x) = c_1 x + ... + c_D x^D` has no coefficient or more than the
+    /// largest degree supported ([`crate::MAX_INPUT_DEGREE`]).
+    InputDegree {
+        /// The number of coefficients given.
+        degree: usize,
+        /// The largest degree supported.
+        max: usize,
     },
     /// WIHC divides by `a2` (eq. (9)), which must be positive.
     NonPositiveA2 {
@@ -201,10 +217,28 @@ impl fmt::Display for CoreError {
                  IHC cannot be built from this model (WIHC may still work)",
                 WeightSum(*active_operators),
             ),
-            CoreError::DelayedWihcUnstable { ratio, input } => write!(
+            CoreError::DelayedLoopUnstable {
+                compensator,
+                gain,
+                input,
+                active_operators,
+            } => write!(
                 f,
-                "the delayed WIHC would diverge: |3 a1 x^2 + sum of zero-threshold weights| / a2 = \
-                 {ratio:.4} >= 1 at x = {input:.4}; use the exact WIHC instead"
+                "the one-sample-delayed {compensator} can oscillate on this model: its loop gain \
+                 is {gain:.4} >= 1 at normalised input x = {input:.4} {} ({}); use the exact \
+                 solve or the guarded delayed loop, which never oscillate, identify the model \
+                 for delayed compensation, or allow the unstable loop explicitly",
+                Moving(*active_operators),
+                if *compensator == "IHC" {
+                    "|g'(x) - a2| / (a2 + b_1 + ... + b_k)"
+                } else {
+                    "|g'(x) - a2 + b_1 + ... + b_k| / a2"
+                },
+            ),
+            CoreError::InputDegree { degree, max } => write!(
+                f,
+                "the input polynomial has {degree} coefficient(s); give between 1 and {max} \
+                 (c_1 = a2, c_2, c_3 = a1, ..., up to degree {max})"
             ),
             CoreError::NonPositiveA2 { a2 } => {
                 write!(f, "WIHC divides by a2 (eq. (9)) but a2 = {a2} is not > 0")

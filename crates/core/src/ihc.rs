@@ -1,23 +1,59 @@
 //! Inverse hysteresis compensation (IHC), eqs. (5)-(8).
 
 use crate::compensator::OutputGuard;
-use crate::solve::increasing_cubic_root;
+use crate::invertibility::DelayedLoop;
+use crate::solve::{OddCubic, Remainder, increasing_root};
 use crate::walk::{PlayBank, SegmentEquation, rounding_tolerance};
-use crate::{Buffer, Compensator, CoreError, Diagnostics, Mpim, OutputLimits, Real, SolveMode};
+use crate::{
+    Buffer, Compensator, CoreError, Diagnostics, InputPolynomial, LoopGain, Mpim, OutputLimits,
+    Real, SolveMode,
+};
 
 /// IHC, section 3.1: the inverse of the identified plant MPIM in the feedforward path,
 /// `v(t) = P1^{-1}[w](t)` with `w = y_d - a1 v^3` (eqs. (5)-(6)) and `P1^{-1}` the analytic
-/// inverse of the PI part, eq. (7) (built once by [`Mpim::pi_part_inverse`]).
+/// inverse of the PI part, eq. (7) (built once by [`Mpim::pi_part_inverse`]). With a
+/// higher-degree input polynomial `g`, `a1 v^3` is its remainder `h(v) = g(v) - a2 v`.
 ///
 /// - [`SolveMode::Exact`]: `w` depends on the `v(t)` being computed; the implicit equation
-///   `w + a1 (P1^{-1}[w](t))^3 = y_d(t)` is solved exactly each sample, so that the plant model
+///   `w + h(P1^{-1}[w](t)) = y_d(t)` is solved exactly each sample, so that the plant model
 ///   gives `P[v](t) = y_d(t)`.
-/// - [`SolveMode::Delayed`]: `w(t) = y_d(t) - a1 v^3(t - Ts)`, as real-time implementations do.
-///   Cost: a sample where the delayed solve hits an output limit also runs the exact solve of
-///   eq. (5) from the same state, only to classify the clamp (reachable:
-///   [`Diagnostics::loop_saturated`]; not: [`Diagnostics::saturated`]), so it costs about one
-///   exact step more. The worst case per sample is the delayed step plus the exact step;
-///   real-time budgets should use that bound.
+/// - [`SolveMode::Delayed`]: `w(t) = y_d(t) - h(v(t - Ts))`, as real-time implementations do.
+///   While `y_d` holds, successive `w` differ by at most [`Ihc::delayed_loop_gain`] times the
+///   previous difference (`|g'(x) - a2| / (a2 + b_1 + ... + b_k)` over the reachable branches,
+///   see [`Mpim::delayed_ihc_loop_gain`]): below 1 the loop settles after any jump in `y_d`;
+///   at or above 1 it can ring between the limits (after reversals near the top of the range
+///   on models with a large positive `a1`), and the constructor refuses it with
+///   [`CoreError::DelayedLoopUnstable`].
+/// - [`SolveMode::DelayedAllowUnstable`]: the same loop without that check (the explicit
+///   override).
+/// - [`SolveMode::DelayedGuarded`]: an under-relaxed delayed loop that cannot oscillate,
+///   whatever the model:
+///
+///   `w(t) = w(t - Ts) + mu e(t)`, `e(t) = y_d(t) - w(t - Ts) - h(v(t - Ts))`,
+///   `mu = min(1, 1 / (1 + q_max))`,
+///
+///   where `w(t - Ts) + h(v(t - Ts))` is the plant model's output for the previous drive
+///   (`P1[P1^{-1}[w]] = w`, ERRATA item 3), so `e` is the model's tracking error, and `q_max`
+///   is the largest signed gain `(g'(x) - a2) / (a2 + b_1 + ... + b_k)` over the reachable
+///   branches. With `mu = 1` this is the plain delayed loop.
+///
+///   *Proof sketch.* While `y_d` holds, moving `w` from `w(t - Ts)` to `w(t)` moves `v` along
+///   `P1^{-1}` and the model's output by `integral (1 + q(k, v)) dw` over the move, where each
+///   `(k, v)` met is a reachable branch and `1 + q = (g'(v) + b_1 + ... + b_k) /
+///   (a2 + b_1 + ... + b_k)` is the model's slope over the PI part's, positive for an
+///   invertible model. So `e(t + Ts) = e(t) (1 - mu (1 + q_avg))` with `1 + q_avg` in
+///   `[1 + q_min, 1 + q_max]`: the factor lies in `[0, 1 - mu (1 + q_min)]`, below 1. The error
+///   keeps its sign and shrinks; an output limit only shortens the move, which keeps the
+///   factor in `[0, 1)`. The model's output therefore approaches `y_d` from one side, the
+///   drive moves monotonically towards the exact solution and never alternates between
+///   limits. When `y_d` moves, the error is the tracking lag, again without overshoot from the
+///   loop. The price: when `q_max > 0` it lags a little more than the plain delayed loop.
+///
+/// Cost: a sample where the delayed solve hits an output limit also runs the exact solve of
+/// eq. (5) from the same state, only to classify the clamp (reachable:
+/// [`Diagnostics::loop_saturated`]; not: [`Diagnostics::saturated`]), so it costs about one
+/// exact step more. The worst case per sample is the delayed step plus the exact step;
+/// real-time budgets should use that bound.
 ///
 /// See [`Compensator`] for the output guarantees.
 #[derive(Debug, Clone)]
@@ -25,14 +61,21 @@ pub struct Ihc<T: Real, B: Buffer<T>> {
     /// `P1^{-1}[w] = a2_hat w + sum b_hat_j F_{r_hat_j}[w]` of eq. (7), with its memory; its
     /// last input is the last `w`.
     inverse: PlayBank<T, B>,
-    a1: T,
+    /// The plant's input polynomial `g`; the loop uses its remainder `g(v) - a2 v`.
+    input: InputPolynomial<T>,
     mode: SolveMode,
+    /// `mu` of [`SolveMode::DelayedGuarded`], whatever the mode.
+    relaxation: T,
+    /// The delayed loop's worst-case gain over the limits, whatever the mode (kept: it needs
+    /// the plant's thresholds and weights, which the compensator does not keep).
+    loop_gain: LoopGain<T>,
     guard: OutputGuard<T>,
 }
 
 impl<T: Real, B: Buffer<T>> Ihc<T, B> {
-    /// An IHC from a plant model: builds the inverse of eq. (7) and checks that the model is
-    /// invertible over the output limits (see [`Mpim::check_invertible`]).
+    /// An IHC from a plant model: builds the inverse of eq. (7), checks that the model is
+    /// invertible over the output limits (see [`Mpim::check_invertible`]) and, for
+    /// [`SolveMode::Delayed`], that the delayed loop's gain over the limits is below 1.
     pub fn new<B2: Buffer<T>>(
         plant: &Mpim<T, B2>,
         limits: OutputLimits<T>,
@@ -40,10 +83,23 @@ impl<T: Real, B: Buffer<T>> Ihc<T, B> {
     ) -> Result<Self, CoreError> {
         plant.check_invertible(limits.min(), limits.max())?;
         let inverse = plant.pi_part_inverse()?;
+        let gains = plant.delayed_gain_range(DelayedLoop::Ihc, limits.min(), limits.max());
+        // NaN counts as unstable.
+        if mode == SolveMode::Delayed && (gains.worst.gain >= T::one() || gains.worst.gain.is_nan())
+        {
+            return Err(CoreError::DelayedLoopUnstable {
+                compensator: "IHC",
+                gain: gains.worst.gain.to_f64(),
+                input: gains.worst.input.to_f64(),
+                active_operators: gains.worst.active_operators,
+            });
+        }
         let mut ihc = Ihc {
             inverse: PlayBank::new(inverse.a2(), inverse.thresholds(), inverse.weights())?,
-            a1: plant.a1(),
+            input: *plant.input_polynomial(),
             mode,
+            relaxation: gains.relaxation(),
+            loop_gain: gains.worst,
             guard: OutputGuard::new(limits),
         };
         ihc.reset();
@@ -53,6 +109,22 @@ impl<T: Real, B: Buffer<T>> Ihc<T, B> {
     /// The solve mode.
     pub fn mode(&self) -> SolveMode {
         self.mode
+    }
+
+    /// The worst-case small-signal gain of the delayed loop over every branch reachable within
+    /// the output limits, `max |g'(x) - a2| / (a2 + b_1 + ... + b_k)` (see
+    /// [`Mpim::delayed_ihc_loop_gain`]). Reported whatever the mode, so that a caller can
+    /// choose: below 1 the delayed loop settles after any jump in `y_d`; at or above 1 prefer
+    /// [`SolveMode::Exact`] or [`SolveMode::DelayedGuarded`]. Table 1 of the paper on
+    /// `[0, 1]`: 0.68.
+    pub fn delayed_loop_gain(&self) -> LoopGain<T> {
+        self.loop_gain
+    }
+
+    /// The under-relaxation `mu` of [`SolveMode::DelayedGuarded`] on this model and limits, in
+    /// `(0, 1]` (1: the guarded loop is the plain delayed one). Reported whatever the mode.
+    pub fn guard_relaxation(&self) -> T {
+        self.relaxation
     }
 
     /// The inverse PI part `P1^{-1}` of eq. (7) this compensator runs, as a model (`a1 = 0`):
@@ -70,29 +142,29 @@ impl<T: Real, B: Buffer<T>> Ihc<T, B> {
 }
 
 /// Exact IHC on one segment where `P1^{-1}[w] = alpha w + beta`:
-/// `w + a1 (alpha w + beta)^3 = y_d`, solved in `v = alpha w + beta` as
-/// `a1 v^3 + v / alpha - beta / alpha - y_d = 0`.
-struct Eq5Exact<T> {
-    a1: T,
+/// `w + h(alpha w + beta) = y_d`, solved in `v = alpha w + beta` as
+/// `h(v) + v / alpha - beta / alpha - y_d = 0`.
+struct Eq5Exact<T, R> {
+    remainder: R,
     desired: T,
 }
 
-impl<T: Real> SegmentEquation<T> for Eq5Exact<T> {
+impl<T: Real, R: Remainder<T>> SegmentEquation<T> for Eq5Exact<T, R> {
     #[inline(always)]
     fn residual(&self, w: T, alpha: T, beta: T) -> T {
         let v = alpha * w + beta;
-        w + self.a1 * v * v * v - self.desired
+        w + self.remainder.value(v) - self.desired
     }
     #[inline(always)]
     fn rounding(&self, w: T, alpha: T, beta: T) -> T {
         let v = alpha * w + beta;
-        let terms = w.abs() + (self.a1 * v * v * v).abs() + self.desired.abs();
+        let terms = w.abs() + self.remainder.size(v) + self.desired.abs();
         rounding_tolerance(terms)
     }
     #[inline(always)]
     fn root(&self, lo: T, hi: T, f_lo: T, f_hi: T, alpha: T, beta: T, inv_alpha: T) -> T {
-        let v = increasing_cubic_root(
-            self.a1,
+        let v = increasing_root(
+            self.remainder,
             inv_alpha,
             -beta * inv_alpha - self.desired,
             alpha * lo + beta,
@@ -104,8 +176,8 @@ impl<T: Real> SegmentEquation<T> for Eq5Exact<T> {
     }
 }
 
-/// Delayed IHC on one segment: `w` is known, `w(t) = y_d(t) - a1 v^3(t - Ts)`; the walk only
-/// keeps the control within the limits.
+/// Delayed IHC on one segment: `w` is known, `w(t) = y_d(t) - h(v(t - Ts))` (or the guarded
+/// update); the walk only keeps the control within the limits.
 struct Eq5Delayed<T> {
     w: T,
 }
@@ -137,6 +209,61 @@ impl<T: Real> SegmentEquation<T> for ReachControl<T> {
     }
 }
 
+/// One sample of IHC with the remainder `h` (the paper's cubic or a higher-degree one, each
+/// specialised).
+#[inline(always)]
+fn ihc_step<T: Real, B: Buffer<T>, R: Remainder<T>>(
+    inverse: &mut PlayBank<T, B>,
+    guard: &mut OutputGuard<T>,
+    mode: SolveMode,
+    relaxation: T,
+    remainder: R,
+    desired: T,
+) -> T {
+    let v_prev = guard.previous;
+    let w_prev = inverse.input();
+    let h_prev = remainder.value(v_prev);
+    let exact = Eq5Exact { remainder, desired };
+    // Residual of the exact eq. (5) at the previous sample: w_prev + h(v_prev) - y_d, minus the
+    // model's tracking error of the previous drive.
+    let f_exact = w_prev + h_prev - desired;
+    if mode == SolveMode::Exact {
+        let solution = inverse.solve(&exact, f_exact, guard.limits);
+        let v = inverse.feed_solved(&solution);
+        return guard.emit(v, solution.saturated);
+    }
+    // Eq. (5) with the loop broken: w(t) = y_d(t) - h(v(t - Ts)); guarded, the under-relaxed
+    // w(t - Ts) + mu (y_d(t) - w(t - Ts) - h(v(t - Ts))).
+    let w = if mode == SolveMode::DelayedGuarded && relaxation < T::one() {
+        w_prev - relaxation * f_exact
+    } else {
+        desired - h_prev
+    };
+    let solution = inverse.solve(&Eq5Delayed { w }, w_prev - w, guard.limits);
+    // A clamped sample: was y_d reachable within the limits? The exact solve from the same
+    // state says; it only runs when the delayed loop hit a limit.
+    let reachable = solution.saturated && !inverse.solve(&exact, f_exact, guard.limits).saturated;
+    let v = inverse.feed_solved(&solution);
+    guard.emit_classified(v, solution.saturated, || reachable)
+}
+
+impl<T: Real, B: Buffer<T>> Ihc<T, B> {
+    /// One sample with a higher-degree input polynomial, out of line so that the cubic's path
+    /// stays as short as it was.
+    #[inline(never)]
+    fn general_step(&mut self, desired: T) -> T {
+        let (inverse, guard) = (&mut self.inverse, &mut self.guard);
+        ihc_step(
+            inverse,
+            guard,
+            self.mode,
+            self.relaxation,
+            &self.input,
+            desired,
+        )
+    }
+}
+
 impl<T: Real, B: Buffer<T>> Compensator<T> for Ihc<T, B> {
     fn reset(&mut self) {
         self.inverse.reset();
@@ -156,38 +283,19 @@ impl<T: Real, B: Buffer<T>> Compensator<T> for Ihc<T, B> {
         let Some(desired) = self.guard.accept(desired) else {
             return self.guard.previous;
         };
-        let v_prev = self.guard.previous;
-        let w_prev = self.inverse.input();
-        let cubic_prev = self.a1 * v_prev * v_prev * v_prev;
-        let exact = Eq5Exact {
-            a1: self.a1,
-            desired,
-        };
-        // Residual of the exact eq. (5) at the previous sample: w_prev + a1 v_prev^3 - y_d.
-        let f_exact = w_prev + cubic_prev - desired;
-        match self.mode {
-            SolveMode::Exact => {
-                let solution = self.inverse.solve(&exact, f_exact, self.guard.limits);
-                let v = self.inverse.feed_solved(&solution);
-                self.guard.emit(v, solution.saturated)
-            }
-            SolveMode::Delayed => {
-                // Eq. (5) with the loop broken: w(t) = y_d(t) - a1 v^3(t - Ts).
-                let w = desired - cubic_prev;
-                let solution = self
-                    .inverse
-                    .solve(&Eq5Delayed { w }, w_prev - w, self.guard.limits);
-                // A clamped sample: was y_d reachable within the limits? The exact solve from
-                // the same state says; it only runs when the delayed loop hit a limit.
-                let reachable = solution.saturated
-                    && !self
-                        .inverse
-                        .solve(&exact, f_exact, self.guard.limits)
-                        .saturated;
-                let v = self.inverse.feed_solved(&solution);
-                self.guard
-                    .emit_classified(v, solution.saturated, || reachable)
-            }
+        if self.input.is_odd_cubic() {
+            let remainder = OddCubic(self.input.a1());
+            let (inverse, guard) = (&mut self.inverse, &mut self.guard);
+            ihc_step(
+                inverse,
+                guard,
+                self.mode,
+                self.relaxation,
+                remainder,
+                desired,
+            )
+        } else {
+            self.general_step(desired)
         }
     }
 

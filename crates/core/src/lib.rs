@@ -55,6 +55,7 @@ mod invertibility;
 mod mpim;
 pub mod paper;
 mod play;
+mod polynomial;
 mod real;
 #[cfg(feature = "alloc")]
 pub mod reference;
@@ -71,9 +72,10 @@ pub use creep::{Creep, CreepInverse, MAX_CREEP_ELEMENTS};
 pub use dihc::Dihc;
 pub use error::CoreError;
 pub use ihc::Ihc;
-pub use invertibility::{BranchSlope, LoopGain, branch_checkpoints};
+pub use invertibility::{BranchSlope, LoopGain, branch_checkpoints, branch_intervals};
 pub use mpim::Mpim;
 pub use play::{OneSidedPlay, SymmetricPlay};
+pub use polynomial::{InputPolynomial, MAX_INPUT_DEGREE};
 pub use real::Real;
 pub use vibration::{
     MAX_DELAY_SAMPLES, MAX_PREVIEW_SAMPLES, MAX_VIBRATION_ORDER, STATIC_GAIN_TOLERANCE,

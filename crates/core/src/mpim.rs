@@ -1,13 +1,17 @@
 //! The modified Prandtl-Ishlinskii model (MPIM), eqs. (3)-(4).
 
 use crate::buffer::{copied, filled};
-use crate::invertibility::{LoopGain, max_delayed_loop_gain, min_branch_slope};
+use crate::invertibility::{DelayedLoop, delayed_gain_range, min_branch_slope};
 use crate::play::{feed_bank, four_way_sum, one_sided};
-use crate::{BranchSlope, Buffer, CoreError, Real};
+use crate::{BranchSlope, Buffer, CoreError, InputPolynomial, LoopGain, Real};
 
 /// The discrete MPIM of eq. (4):
 /// `y(t) = a1 x^3(t) + a2 x(t) + sum_{i=1}^{n} b_i F_{r_i}[x](t)`,
 /// with one-sided play operators `F_r` (eqs. (1)-(2)), thresholds `r_i` and weights `b_i`.
+///
+/// The input function `g(x) = a1 x^3 + a2 x` of eq. (3) may also be a higher-degree polynomial
+/// `g(x) = c_1 x + ... + c_D x^D` ([`InputPolynomial`], [`Mpim::with_input_polynomial`]); every
+/// check (invertibility, loop gains) covers it exactly.
 ///
 /// The same type describes a plant model (input: normalised voltage, output: normalised
 /// displacement; Table 1), an inverse model used by DIHC (input: normalised desired position,
@@ -20,8 +24,7 @@ pub struct Mpim<T: Real, B: Buffer<T>> {
     thresholds: B,
     weights: B,
     memory: B,
-    a1: T,
-    a2: T,
+    input: InputPolynomial<T>,
 }
 
 impl<T: Real, B: Buffer<T>> Mpim<T, B> {
@@ -29,6 +32,16 @@ impl<T: Real, B: Buffer<T>> Mpim<T, B> {
     /// thresholds non-negative and sorted increasingly. The operators' memory starts at zero
     /// (eq. (1)).
     pub fn new(thresholds: &[T], weights: &[T], a1: T, a2: T) -> Result<Self, CoreError> {
+        Self::with_input_polynomial(thresholds, weights, InputPolynomial::cubic(a1, a2)?)
+    }
+
+    /// A validated model with the input polynomial `input` instead of the paper's cubic (the
+    /// same checks as [`Mpim::new`]).
+    pub fn with_input_polynomial(
+        thresholds: &[T],
+        weights: &[T],
+        input: InputPolynomial<T>,
+    ) -> Result<Self, CoreError> {
         if weights.len() != thresholds.len() {
             return Err(CoreError::LengthMismatch {
                 what: "weights",
@@ -44,11 +57,6 @@ impl<T: Real, B: Buffer<T>> Mpim<T, B> {
                 });
             }
         }
-        for (what, value) in [("a1", a1), ("a2", a2)] {
-            if !value.is_finite() {
-                return Err(CoreError::NonFinite { what, index: None });
-            }
-        }
         if let Some(index) = thresholds.iter().position(|r| *r < T::zero()) {
             return Err(CoreError::NegativeThreshold {
                 index,
@@ -62,8 +70,7 @@ impl<T: Real, B: Buffer<T>> Mpim<T, B> {
             thresholds: copied(thresholds)?,
             weights: copied(weights)?,
             memory: filled(T::zero(), thresholds.len())?,
-            a1,
-            a2,
+            input,
         })
     }
 
@@ -73,8 +80,7 @@ impl<T: Real, B: Buffer<T>> Mpim<T, B> {
             thresholds: copied(self.thresholds())?,
             weights: copied(self.weights())?,
             memory: copied(self.memory())?,
-            a1: self.a1,
-            a2: self.a2,
+            input: self.input,
         })
     }
 
@@ -98,14 +104,21 @@ impl<T: Real, B: Buffer<T>> Mpim<T, B> {
         self.weights.as_ref()
     }
 
-    /// Cubic coefficient `a1` of the input function `g(x) = a1 x^3 + a2 x`.
+    /// Cubic coefficient `a1` of the input function `g(x) = a1 x^3 + a2 x` (`c_3` of a
+    /// higher-degree `g`).
     pub fn a1(&self) -> T {
-        self.a1
+        self.input.a1()
     }
 
-    /// Linear coefficient `a2` of the input function `g(x) = a1 x^3 + a2 x`.
+    /// Linear coefficient `a2` of the input function `g(x) = a1 x^3 + a2 x` (`c_1` of a
+    /// higher-degree `g`).
     pub fn a2(&self) -> T {
-        self.a2
+        self.input.a2()
+    }
+
+    /// The input function `g` (eq. (3)).
+    pub fn input_polynomial(&self) -> &InputPolynomial<T> {
+        &self.input
     }
 
     /// The operators' memory `F_{r_i}[x](t_i)`, one per operator.
@@ -148,6 +161,7 @@ impl<T: Real, B: Buffer<T>> Mpim<T, B> {
         if input.is_nan() {
             return input;
         }
+        let g = self.input_function(input);
         let sum = feed_bank(
             self.thresholds.as_ref(),
             self.weights.as_ref(),
@@ -155,7 +169,7 @@ impl<T: Real, B: Buffer<T>> Mpim<T, B> {
             input,
         )
         .sum;
-        self.input_function(input) + sum
+        g + sum
     }
 
     /// Runs a whole signal through [`Mpim::step`]: `output[k] = y(t_k)`.
@@ -181,10 +195,11 @@ impl<T: Real, B: Buffer<T>> Mpim<T, B> {
         self.input_function(input) + four_way_sum(n, |i| b[i] * one_sided(input, r[i], w[i]))
     }
 
-    /// `g(x) = a1 x^3 + a2 x`, the polynomial input function of eq. (3).
+    /// `g(x) = a1 x^3 + a2 x`, the polynomial input function of eq. (3) (or the higher-degree
+    /// polynomial the model was built with).
     #[inline]
     pub fn input_function(&self, x: T) -> T {
-        (self.a1 * x * x + self.a2) * x
+        self.input.value(x)
     }
 
     /// The smallest slope of the model output with respect to its current input over every
@@ -195,8 +210,7 @@ impl<T: Real, B: Buffer<T>> Mpim<T, B> {
         Ok(min_branch_slope(
             self.thresholds(),
             self.weights(),
-            self.a1,
-            self.a2,
+            &self.input,
             lo,
             hi,
         ))
@@ -225,23 +239,53 @@ impl<T: Real, B: Buffer<T>> Mpim<T, B> {
     /// include 0).
     ///
     /// The delayed WIHC evaluates eq. (9) with `H[v](t - Ts)`, `v(t) = (y_d(t) - H[v](t - Ts)) / a2`,
-    /// `H[v] = a1 v^3 + sum b_i F_{r_i}[v]`: a fixed-point iteration whose gain on a branch with
-    /// the first `k` operators moving is `|3 a1 x^2 + b_1 + ... + b_k| / a2`. Around a reversal
-    /// only the zero-threshold operators move (the constructor of [`crate::Wihc`] requires
-    /// that gain to be below 1); after a jump in `y_d` the loop swings over a wide range, more
-    /// operators move, and this worst case decides whether it settles (below 1: the error
-    /// shrinks at least by this factor each sample) or can ring between the output limits.
+    /// `H[v] = g(v) - a2 v + sum b_i F_{r_i}[v]`: a fixed-point iteration whose gain on a branch
+    /// with the first `k` operators moving is `|g'(x) - a2 + b_1 + ... + b_k| / a2`
+    /// (`|3 a1 x^2 + b_1 + ... + b_k| / a2` for the paper's cubic). Around a reversal only the
+    /// zero-threshold operators move; after a jump in `y_d` the loop swings over a wide range,
+    /// more operators move, and this worst case over every reachable `k` and `x` decides whether
+    /// it settles (below 1: the difference between successive drives shrinks at least by this
+    /// factor each sample while `y_d` holds) or can ring between the output limits.
     /// Table 1 of the paper over `[0, 1]`: 1.66 (all ten operators moving near `x = 0`).
     pub fn delayed_wihc_loop_gain(&self, lo: T, hi: T) -> Result<LoopGain<T>, CoreError> {
         check_range(lo, hi)?;
-        Ok(max_delayed_loop_gain(
+        Ok(self.delayed_gain_range(DelayedLoop::Wihc, lo, hi).worst)
+    }
+
+    /// The worst-case small-signal loop gain of the delayed IHC built on this (plant) model,
+    /// over every branch reachable from the reset state with inputs in `[lo, hi]` (widened to
+    /// include 0).
+    ///
+    /// The delayed IHC evaluates eq. (5) with the previous drive in the input function's
+    /// remainder, `w(t) = y_d(t) - h(v(t - Ts))` with `h(v) = g(v) - a2 v` (`a1 v^3` for the
+    /// paper's cubic), and `v(t) = P1^{-1}[w](t)` (eq. (7)). On a branch with the first `k`
+    /// operators moving, `P1^{-1}` has slope `1 / (a2 + b_1 + ... + b_k)`, so the loop's gain
+    /// is `|g'(x) - a2| / (a2 + b_1 + ... + b_k)` (`|3 a1 x^2| / (a2 + b_1 + ... + b_k)`). Below
+    /// 1 the difference between successive `w` shrinks at least by this factor each sample
+    /// while `y_d` holds (along each sample's move the pairs `(k, x)` are reachable ones, so the
+    /// bound holds for large moves as well); at or above 1 the loop can ring between the
+    /// limits. Table 1 of the paper over `[0, 1]`: 0.68 (`x = 1`, only the zero-threshold
+    /// operator moving).
+    pub fn delayed_ihc_loop_gain(&self, lo: T, hi: T) -> Result<LoopGain<T>, CoreError> {
+        check_range(lo, hi)?;
+        Ok(self.delayed_gain_range(DelayedLoop::Ihc, lo, hi).worst)
+    }
+
+    /// The signed gains of a delayed loop over the reachable branches.
+    pub(crate) fn delayed_gain_range(
+        &self,
+        which: DelayedLoop,
+        lo: T,
+        hi: T,
+    ) -> crate::invertibility::GainRange<T> {
+        delayed_gain_range(
+            which,
             self.thresholds(),
             self.weights(),
-            self.a1,
-            self.a2,
+            &self.input,
             lo,
             hi,
-        ))
+        )
     }
 
     /// The analytic inverse of the PI part `P1[v] = a2 v + sum b_i F_{r_i}[v]`, eq. (7):
@@ -250,7 +294,8 @@ impl<T: Real, B: Buffer<T>> Mpim<T, B> {
     /// `b_hat_j = -b_j / ((a2 + sum_{i<j} b_i)(a2 + sum_{i<=j} b_i))`.
     ///
     /// Both start from zero memory, and then `P1^{-1}[P1[v]] = v` exactly (ERRATA item 3).
-    /// The cubic term `a1` is not part of `P1`; the result has `a1 = 0`.
+    /// The cubic term `a1` (the whole remainder `g(x) - a2 x` of a higher-degree input
+    /// polynomial) is not part of `P1`; the result has `a1 = 0`.
     ///
     /// When `a2` itself is not positive but operators with `r = 0` (always moving, `F_0[v] = v`)
     /// make every reachable slope positive, the equivalent form `a2_hat = 1 / (a2 + sum_{r_i=0} b_i)`
@@ -263,8 +308,8 @@ impl<T: Real, B: Buffer<T>> Mpim<T, B> {
         // slope(k) = a2 + b_1 + ... + b_k, the slope of P1 with the first k operators moving,
         // summed in one pass (linear set-up cost for models of many operators).
         let mut literal = true;
-        let mut slope = self.a2;
-        let mut slope_always = self.a2;
+        let mut slope = self.a2();
+        let mut slope_always = self.a2();
         for k in 0..=n {
             if k == always {
                 slope_always = slope;
@@ -287,11 +332,11 @@ impl<T: Real, B: Buffer<T>> Mpim<T, B> {
         let mut b_hat: B = filled(T::zero(), n)?;
         // r_hat_j = a2 r_j + sum_{i<j} b_i (r_j - r_i), computed as r_hat_0 = a2 r_0 and
         // r_hat_j = r_hat_{j-1} + slope(j) (r_j - r_{j-1}) (the same sum, term by term).
-        let mut before = self.a2; // slope(j)
+        let mut before = self.a2(); // slope(j)
         for j in 0..n {
             let after = before + b[j]; // slope(j + 1)
             r_hat.as_mut()[j] = if j == 0 {
-                self.a2 * r[0]
+                self.a2() * r[0]
             } else {
                 r_hat.as_ref()[j - 1] + before * (r[j] - r[j - 1])
             };
@@ -305,7 +350,7 @@ impl<T: Real, B: Buffer<T>> Mpim<T, B> {
             before = after;
         }
         let a2_hat = if literal {
-            T::one() / self.a2
+            T::one() / self.a2()
         } else {
             T::one() / slope_always
         };
@@ -313,8 +358,7 @@ impl<T: Real, B: Buffer<T>> Mpim<T, B> {
             thresholds: r_hat,
             weights: b_hat,
             memory: filled(T::zero(), n)?,
-            a1: T::zero(),
-            a2: a2_hat,
+            input: InputPolynomial::cubic(T::zero(), a2_hat)?,
         };
         if let Some(index) = (0..n).find(|&j| !inverse.weights()[j].is_finite()) {
             return Err(CoreError::NonFinite {

@@ -1,85 +1,122 @@
 //! Without-inverse hysteresis compensation (WIHC), eq. (9).
 
 use crate::compensator::OutputGuard;
-use crate::invertibility::{max_delayed_loop_gain, reversal_loop_gains};
-use crate::solve::increasing_cubic_root;
+use crate::invertibility::{DelayedLoop, delayed_gain_range};
+use crate::solve::{OddCubic, Remainder, increasing_root};
 use crate::walk::{PlayBank, SegmentEquation, rounding_tolerance};
 use crate::{
-    Buffer, Compensator, CoreError, Diagnostics, LoopGain, Mpim, OutputLimits, Real, SolveMode,
+    Buffer, Compensator, CoreError, Diagnostics, InputPolynomial, LoopGain, Mpim, OutputLimits,
+    Real, SolveMode,
 };
 
 /// WIHC, section 3.2: the identified plant MPIM used directly in a multiplicative structure,
-/// `v(t) = (y_d(t) - H[v](t)) / a2` with `H[v](t) = a1 v^3(t) + sum b_i F_{r_i}[v](t)`, eq. (9).
+/// `v(t) = (y_d(t) - H[v](t)) / a2` with `H[v](t) = a1 v^3(t) + sum b_i F_{r_i}[v](t)`, eq. (9)
+/// (with a higher-degree input polynomial `g`, `a1 v^3` is its remainder `h(v) = g(v) - a2 v`).
 ///
 /// - [`SolveMode::Exact`]: eq. (9) is implicit (`H[v](t)` depends on `v(t)`); it is solved
 ///   exactly each sample, so that the plant model gives `P[v](t) = y_d(t)`.
 /// - [`SolveMode::Delayed`]: `H[v](t - Ts)` replaces `H[v](t)`, as real-time implementations
 ///   do (the paper's algorithm). This is a fixed-point iteration
 ///   `v(t) = (y_d(t) - H[v](t - Ts)) / a2` whose small-signal loop gain on a branch with the
-///   first `k` operators moving is `|3 a1 x^2 + b_1 + ... + b_k| / a2`.
-///   - Around a reversal only the zero-threshold operators move; the constructor refuses a
-///     model whose gain there reaches 1 ([`CoreError::DelayedWihcUnstable`]).
-///   - After a jump in `y_d` the loop swings over a wide range and more operators move. Its
-///     worst case over the limits is [`Wihc::delayed_loop_gain`] `g`. Below 1 the loop
-///     contracts: in the small-signal picture its error shrinks by at least the factor `g` each
-///     sample, so settling to a fraction `eps` of the jump takes about `ln(eps) / ln(g)`
-///     samples (a few for `g = 0.3`, about 460 for `g = 0.99` and `eps = 0.01`; many more as
-///     `g` nears 1). Once settled the model's position follows `y_d`, and once the trajectory has swept past the
-///     range of the settling its drive follows the exact WIHC's, both to within a gap that
-///     shrinks with the sampling rate. At or above 1 (Table 1 of the paper: 1.66, all
-///     ten operators moving near `x = 0`) it can ring between the output limits: from rest at
-///     10 kHz, `y_d = 35 + 20 sin(2 pi t)` um makes it alternate between 0 V and 10 V, 151 of
-///     the first 230 samples at a limit, before it settles; the operators' memory the ringing
-///     leaves then keeps its drive off the exact WIHC's (the model's position still follows
-///     `y_d`) until the trajectory sweeps past the ringing's range. The clamped samples count
-///     in [`Diagnostics::loop_saturated`], not in [`Diagnostics::saturated`]: the desired
-///     position was reachable.
+///   first `k` operators moving is `|g'(x) - a2 + b_1 + ... + b_k| / a2`
+///   (`|3 a1 x^2 + b_1 + ... + b_k| / a2` for the paper's cubic). Its worst case over every
+///   branch reachable within the limits is [`Wihc::delayed_loop_gain`] `G`; the constructor
+///   refuses a model with `G >= 1` ([`CoreError::DelayedLoopUnstable`]). Below 1 the loop
+///   contracts: while `y_d` holds, the difference between successive drives shrinks at
+///   least by the factor `G` each sample (along each sample's move the pairs `(k, x)` met are
+///   reachable branches, so this holds for large moves too), so settling to a fraction `eps`
+///   of a jump takes about `ln(eps) / ln(G)` samples (a few for `G = 0.3`, about 460 for
+///   `G = 0.99` and `eps = 0.01`). Once settled the model's position follows `y_d`, and once
+///   the trajectory has swept past the range of the settling its drive follows the exact
+///   WIHC's, both to within a gap that shrinks with the sampling rate. On smooth
+///   trajectories sampled fast, started from a consistent state (the study: 10 kHz, 1 Hz,
+///   from rest at the trajectory's start) it stays within a fraction of a sample's step of
+///   the exact solution.
+/// - [`SolveMode::DelayedAllowUnstable`]: the same loop without the check, the explicit
+///   override. At `G >= 1` (Table 1 of the paper: 1.66, all ten operators moving near
+///   `x = 0`) it can ring between the output limits: from rest at 10 kHz,
+///   `y_d = 35 + 20 sin(2 pi t)` um makes it alternate between 0 V and 10 V, 151 of the first
+///   230 samples at a limit, before it settles; the operators' memory the ringing leaves then
+///   keeps its drive off the exact WIHC's (the model's position still follows `y_d`) until
+///   the trajectory sweeps past the ringing's range. The clamped samples count in
+///   [`Diagnostics::loop_saturated`], not in [`Diagnostics::saturated`]: the desired position
+///   was reachable.
+/// - [`SolveMode::DelayedGuarded`]: an under-relaxed delayed loop that cannot oscillate,
+///   whatever the model:
 ///
-///   On smooth trajectories sampled fast, started from a consistent state (the study:
-///   10 kHz, 1 Hz, from rest at the trajectory's start) it stays within a fraction of a
-///   sample's step of the exact solution. Prefer [`SolveMode::Exact`].
+///   `v(t) = v(t - Ts) + lambda e(t) / a2`, `e(t) = y_d(t) - P_{t - Ts}[v(t - Ts)]`,
+///   `lambda = min(1, 1 / (1 + q_max))`,
 ///
-///   Cost: a clamped delayed sample also runs one exact solve of eq. (9) from the same state,
-///   only to classify the clamp (reachable: [`Diagnostics::loop_saturated`]; not:
-///   [`Diagnostics::saturated`]), so it costs about one exact step more. The worst case per
-///   sample is the delayed step plus the exact step; real-time budgets should use that bound
-///   (the loop can clamp on many consecutive samples while it rings).
+///   where `P_{t - Ts}[v(t - Ts)] = a2 v(t - Ts) + H[v](t - Ts)` is the model's output for the
+///   previous drive (with `lambda = 1`, the plain delayed loop) and `q_max` the largest signed
+///   gain `(g'(x) - a2 + b_1 + ... + b_k) / a2` over the reachable branches.
+///
+///   *Proof sketch.* While `y_d` holds, moving the drive from `v(t - Ts)` to `v(t)` moves the
+///   model's output by `integral (g'(x) + b_1 + ... + b_k) dx` over the move, each `(k, x)`
+///   met a reachable branch, whose slope is `a2 (1 + q)` with `1 + q` in
+///   `[1 + q_min, 1 + q_max]` and `1 + q_min > 0` for an invertible model. So
+///   `e(t + Ts) = e(t) (1 - lambda (1 + q_avg))`, a factor in `[0, 1 - lambda (1 + q_min)]`,
+///   below 1: the error keeps its sign and shrinks, and an output limit only shortens the
+///   move. The model's output approaches `y_d` from one side and the drive moves
+///   monotonically: it never alternates between limits, and it never clamps while `y_d` is
+///   reachable. The price: it lags more than the plain loop when `q_max > 0` (Table 1: `lambda`
+///   = 0.38).
+///
+/// Prefer [`SolveMode::Exact`] where the budget allows.
+///
+/// Cost: a clamped delayed sample also runs one exact solve of eq. (9) from the same state,
+/// only to classify the clamp (reachable: [`Diagnostics::loop_saturated`]; not:
+/// [`Diagnostics::saturated`]), so it costs about one exact step more. The worst case per
+/// sample is the delayed step plus the exact step; real-time budgets should use that bound
+/// (the unchecked loop can clamp on many consecutive samples while it rings).
 ///
 /// See [`Compensator`] for the output guarantees.
 #[derive(Debug, Clone)]
 pub struct Wihc<T: Real, B: Buffer<T>> {
-    /// `a2 v + sum b_i F_{r_i}[v]`: the plant model without its cubic term.
+    /// `a2 v + sum b_i F_{r_i}[v]`: the plant model without its input polynomial's remainder.
     bank: PlayBank<T, B>,
-    a1: T,
+    /// The plant's input polynomial `g`; `H` uses its remainder `g(v) - a2 v`.
+    input: InputPolynomial<T>,
     /// `1 / a2`.
     inverse_a2: T,
     mode: SolveMode,
+    /// `lambda` of [`SolveMode::DelayedGuarded`], whatever the mode.
+    relaxation: T,
     guard: OutputGuard<T>,
 }
 
 impl<T: Real, B: Buffer<T>> Wihc<T, B> {
     /// A WIHC from a plant model. Checks that `a2 > 0`, that the model is invertible over the
-    /// output limits (see [`Mpim::check_invertible`]) and, for the delayed mode, that the
-    /// iteration converges. The model's memory is not used: the compensator starts from the
-    /// reset state.
+    /// output limits (see [`Mpim::check_invertible`]) and, for [`SolveMode::Delayed`], that the
+    /// delayed loop's gain over the limits is below 1. The model's memory is not used: the
+    /// compensator starts from the reset state.
     pub fn new<B2: Buffer<T>>(
         plant: &Mpim<T, B2>,
         limits: OutputLimits<T>,
         mode: SolveMode,
     ) -> Result<Self, CoreError> {
-        let (a1, a2) = (plant.a1(), plant.a2());
+        let a2 = plant.a2();
         if a2 <= T::zero() {
             return Err(CoreError::NonPositiveA2 { a2: a2.to_f64() });
         }
         plant.check_invertible(limits.min(), limits.max())?;
-        if mode == SolveMode::Delayed {
-            check_delayed_contraction(plant, limits)?;
+        let gains = plant.delayed_gain_range(DelayedLoop::Wihc, limits.min(), limits.max());
+        // NaN counts as unstable.
+        if mode == SolveMode::Delayed && (gains.worst.gain >= T::one() || gains.worst.gain.is_nan())
+        {
+            return Err(CoreError::DelayedLoopUnstable {
+                compensator: "WIHC",
+                gain: gains.worst.gain.to_f64(),
+                input: gains.worst.input.to_f64(),
+                active_operators: gains.worst.active_operators,
+            });
         }
         let mut wihc = Wihc {
             bank: PlayBank::new(a2, plant.thresholds(), plant.weights())?,
-            a1,
+            input: *plant.input_polynomial(),
             inverse_a2: T::one() / a2,
             mode,
+            relaxation: gains.relaxation(),
             guard: OutputGuard::new(limits),
         };
         wihc.reset();
@@ -92,22 +129,30 @@ impl<T: Real, B: Buffer<T>> Wihc<T, B> {
     }
 
     /// The worst-case small-signal loop gain of the delayed iteration, over every branch
-    /// reachable within the output limits: `max |3 a1 x^2 + b_1 + ... + b_k| / a2` (see
+    /// reachable within the output limits: `max |g'(x) - a2 + b_1 + ... + b_k| / a2` (see
     /// [`Mpim::delayed_wihc_loop_gain`]). Reported whatever the mode, so that a caller can
     /// choose: below 1 the delayed loop settles after any jump in `y_d`; at or above 1 prefer
-    /// [`SolveMode::Exact`]. Table 1 of the paper on `[0, 1]`: 1.66.
+    /// [`SolveMode::Exact`] or [`SolveMode::DelayedGuarded`]. Table 1 of the paper on
+    /// `[0, 1]`: 1.66.
     pub fn delayed_loop_gain(&self) -> LoopGain<T> {
         // Computed on demand (a few checkpoints per operator), so that the compensator keeps
         // no more RAM than it needs per sample.
         let limits = self.guard.limits;
-        max_delayed_loop_gain(
+        delayed_gain_range(
+            DelayedLoop::Wihc,
             self.bank.thresholds(),
             self.bank.weights(),
-            self.a1,
-            self.bank.a(),
+            &self.input,
             limits.min(),
             limits.max(),
         )
+        .worst
+    }
+
+    /// The under-relaxation `lambda` of [`SolveMode::DelayedGuarded`] on this model and limits,
+    /// in `(0, 1]` (1: the guarded loop is the plain delayed one). Reported whatever the mode.
+    pub fn guard_relaxation(&self) -> T {
+        self.relaxation
     }
 
     /// The plant model's operators' memory as the compensator tracks it (the memory of
@@ -117,44 +162,17 @@ impl<T: Real, B: Buffer<T>> Wihc<T, B> {
     }
 }
 
-/// Around a reversal only the zero-threshold operators move: the delayed loop's gain on that
-/// branch, `|3 a1 x^2 + b_1 + ... + b_k| / a2` with `k` the number of zero-threshold operators
-/// (eq. (9) with `H[v](t - Ts)`), must be below 1 over the whole range. The first checkpoint
-/// (in the order of [`reversal_loop_gains`]) where it is not is reported.
-fn check_delayed_contraction<T: Real, B: Buffer<T>>(
-    plant: &Mpim<T, B>,
-    limits: OutputLimits<T>,
-) -> Result<(), CoreError> {
-    let mut failure = None;
-    reversal_loop_gains(
-        plant.thresholds(),
-        plant.weights(),
-        plant.a1(),
-        plant.a2(),
-        limits.min(),
-        limits.max(),
-        |ratio, x| {
-            if failure.is_none() && (ratio.is_nan() || ratio >= T::one()) {
-                failure = Some(CoreError::DelayedWihcUnstable {
-                    ratio: ratio.to_f64(),
-                    input: x.to_f64(),
-                });
-            }
-        },
-    );
-    failure.map_or(Ok(()), Err)
-}
-
-/// `a1 v^3 + (a2 + sum of moving b) v + beta = y_d` on one segment, in the voltage `v` itself.
-struct Eq9<T> {
-    a1: T,
+/// `h(v) + (a2 + sum of moving b) v + beta = y_d` on one segment (`h(v) = a1 v^3` for the
+/// paper's cubic), in the voltage `v` itself.
+struct Eq9<T, R> {
+    remainder: R,
     desired: T,
 }
 
-impl<T: Real> SegmentEquation<T> for Eq9<T> {
+impl<T: Real, R: Remainder<T>> SegmentEquation<T> for Eq9<T, R> {
     #[inline(always)]
     fn residual(&self, x: T, alpha: T, beta: T) -> T {
-        (self.a1 * x * x + alpha) * x + beta - self.desired
+        self.remainder.with_linear(x, alpha) + beta - self.desired
     }
     #[inline(always)]
     fn control(&self, x: T, _alpha: T, _beta: T) -> T {
@@ -166,13 +184,39 @@ impl<T: Real> SegmentEquation<T> for Eq9<T> {
     }
     #[inline(always)]
     fn rounding(&self, x: T, alpha: T, beta: T) -> T {
-        let terms =
-            (self.a1 * x * x * x).abs() + (alpha * x).abs() + beta.abs() + self.desired.abs();
+        let terms = self.remainder.size(x) + (alpha * x).abs() + beta.abs() + self.desired.abs();
         rounding_tolerance(terms)
     }
     #[inline(always)]
     fn root(&self, lo: T, hi: T, f_lo: T, f_hi: T, alpha: T, beta: T, _inv: T) -> T {
-        increasing_cubic_root(self.a1, alpha, beta - self.desired, lo, hi, f_lo, f_hi)
+        increasing_root(
+            self.remainder,
+            alpha,
+            beta - self.desired,
+            lo,
+            hi,
+            f_lo,
+            f_hi,
+        )
+    }
+}
+
+impl<T: Real, B: Buffer<T>> Wihc<T, B> {
+    /// One sample with a higher-degree input polynomial, out of line so that the cubic's path
+    /// stays as short as it was.
+    #[inline(never)]
+    fn general_step(&mut self, desired: T) -> T {
+        let (bank, guard) = (&mut self.bank, &mut self.guard);
+        let (mode, relaxation, inverse_a2) = (self.mode, self.relaxation, self.inverse_a2);
+        wihc_step(
+            bank,
+            guard,
+            mode,
+            relaxation,
+            inverse_a2,
+            &self.input,
+            desired,
+        )
     }
 }
 
@@ -193,42 +237,15 @@ impl<T: Real, B: Buffer<T>> Compensator<T> for Wihc<T, B> {
         let Some(desired) = self.guard.accept(desired) else {
             return self.guard.previous;
         };
-        let v_prev = self.bank.input();
-        match self.mode {
-            SolveMode::Exact => {
-                let equation = Eq9 {
-                    a1: self.a1,
-                    desired,
-                };
-                let f_prev = self.a1 * v_prev * v_prev * v_prev + self.bank.output() - desired;
-                let s = self.bank.solve(&equation, f_prev, self.guard.limits);
-                let v = self.guard.emit(s.input, s.saturated);
-                if v == s.input {
-                    self.bank.feed_solved(&s);
-                } else {
-                    self.bank.feed(v);
-                }
-                v
-            }
-            SolveMode::Delayed => {
-                // H[v](t - Ts) = a1 v^3(t - Ts) + sum b_i F_{r_i}[v](t - Ts).
-                let h_prev = self.a1 * v_prev * v_prev * v_prev + self.bank.memory_sum();
-                // A clamped sample counts as a loop saturation when the exact eq. (9) could
-                // have been met within the limits from the same state (solved only then).
-                let (a1, bank, limits) = (self.a1, &self.bank, self.guard.limits);
-                let reachable = || {
-                    let equation = Eq9 { a1, desired };
-                    let f_prev = a1 * v_prev * v_prev * v_prev + bank.output() - desired;
-                    !bank.solve(&equation, f_prev, limits).saturated
-                };
-                let v = self.guard.emit_classified(
-                    (desired - h_prev) * self.inverse_a2,
-                    false,
-                    reachable,
-                );
-                self.bank.feed(v);
-                v
-            }
+        if self.input.is_odd_cubic() {
+            let remainder = OddCubic(self.input.a1());
+            let (bank, guard) = (&mut self.bank, &mut self.guard);
+            let (mode, relaxation, inverse_a2) = (self.mode, self.relaxation, self.inverse_a2);
+            wihc_step(
+                bank, guard, mode, relaxation, inverse_a2, remainder, desired,
+            )
+        } else {
+            self.general_step(desired)
         }
     }
 
@@ -239,4 +256,51 @@ impl<T: Real, B: Buffer<T>> Compensator<T> for Wihc<T, B> {
     fn diagnostics(&self) -> Diagnostics {
         self.guard.diagnostics
     }
+}
+
+/// One sample of WIHC with the remainder `h` (the paper's cubic or a higher-degree one, each
+/// specialised).
+#[inline(always)]
+fn wihc_step<T: Real, B: Buffer<T>, R: Remainder<T>>(
+    bank: &mut PlayBank<T, B>,
+    guard: &mut OutputGuard<T>,
+    mode: SolveMode,
+    relaxation: T,
+    inverse_a2: T,
+    remainder: R,
+    desired: T,
+) -> T {
+    let v_prev = bank.input();
+    if mode == SolveMode::Exact {
+        let equation = Eq9 { remainder, desired };
+        let f_prev = remainder.value(v_prev) + bank.output() - desired;
+        let s = bank.solve(&equation, f_prev, guard.limits);
+        let v = guard.emit(s.input, s.saturated);
+        if v == s.input {
+            bank.feed_solved(&s);
+        } else {
+            bank.feed(v);
+        }
+        return v;
+    }
+    // H[v](t - Ts) = h(v(t - Ts)) + sum b_i F_{r_i}[v](t - Ts).
+    let h_prev = remainder.value(v_prev) + bank.memory_sum();
+    let next = if mode == SolveMode::DelayedGuarded && relaxation < T::one() {
+        // v(t - Ts) + lambda (y_d(t) - a2 v(t - Ts) - H[v](t - Ts)) / a2.
+        v_prev + relaxation * (desired - h_prev - bank.a() * v_prev) * inverse_a2
+    } else {
+        (desired - h_prev) * inverse_a2
+    };
+    // A clamped sample counts as a loop saturation when the exact eq. (9) could have been met
+    // within the limits from the same state (solved only then).
+    let limits = guard.limits;
+    let state: &PlayBank<T, B> = bank;
+    let reachable = || {
+        let equation = Eq9 { remainder, desired };
+        let f_prev = remainder.value(v_prev) + state.output() - desired;
+        !state.solve(&equation, f_prev, limits).saturated
+    };
+    let v = guard.emit_classified(next, false, reachable);
+    bank.feed(v);
+    v
 }

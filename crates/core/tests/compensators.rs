@@ -109,11 +109,17 @@ proptest! {
         // that build must keep the guarantees too.
         if rng.random::<bool>() {
             let hard = random_invertible_model(&mut rng, 8);
-            if let Ok(c) = Ihc::<f64, Vec<f64>>::new(&hard, limits, SolveMode::Delayed) {
-                compensators.push(("ihc-delayed (hard)", Box::new(c)));
-            }
-            if let Ok(c) = Wihc::<f64, Vec<f64>>::new(&hard, limits, SolveMode::Delayed) {
-                compensators.push(("wihc-delayed (hard)", Box::new(c)));
+            // The unchecked and the guarded loops build on any invertible model.
+            for (name, mode) in [
+                ("delayed, unchecked", SolveMode::DelayedAllowUnstable),
+                ("delayed, guarded", SolveMode::DelayedGuarded),
+            ] {
+                if let Ok(c) = Ihc::<f64, Vec<f64>>::new(&hard, limits, mode) {
+                    compensators.push((name, Box::new(c)));
+                }
+                if let Ok(c) = Wihc::<f64, Vec<f64>>::new(&hard, limits, mode) {
+                    compensators.push((name, Box::new(c)));
+                }
             }
         }
         for (name, c) in compensators.iter_mut() {
@@ -161,7 +167,9 @@ fn delayed_gap(
     rate_hz: f64,
 ) -> f64 {
     let mut exact = make(SolveMode::Exact);
-    let mut delayed = make(SolveMode::Delayed);
+    // Table 1's delayed WIHC has a loop gain above 1: allowed explicitly (the trajectory
+    // starts at rest, so it does not ring).
+    let mut delayed = make(SolveMode::DelayedAllowUnstable);
     let mut p = plant.clone();
     let samples = (2.0 * rate_hz) as usize;
     let mut worst: f64 = 0.0;
@@ -249,7 +257,12 @@ fn non_invertible_models_are_refused_by_every_compensator() {
     b[0] = 0.0;
     let bad: VecMpim = Mpim::new(&TABLE1_R, &b, -0.3, TABLE1_A2).unwrap();
     let limits = unit_limits();
-    for mode in [SolveMode::Exact, SolveMode::Delayed] {
+    for mode in [
+        SolveMode::Exact,
+        SolveMode::Delayed,
+        SolveMode::DelayedGuarded,
+        SolveMode::DelayedAllowUnstable,
+    ] {
         assert!(matches!(
             Ihc::<f64, Vec<f64>>::new(&bad, limits, mode),
             Err(CoreError::NotInvertible { .. })
@@ -276,10 +289,22 @@ fn delayed_wihc_refuses_a_model_whose_loop_diverges() {
     let m: VecMpim = Mpim::new(&[0.0, 0.5], &[0.8, 0.1], 0.0, 0.5).unwrap();
     let err = Wihc::<f64, Vec<f64>>::new(&m, unit_limits(), SolveMode::Delayed).unwrap_err();
     assert!(
-        matches!(err, CoreError::DelayedWihcUnstable { .. }),
+        matches!(
+            err,
+            CoreError::DelayedLoopUnstable {
+                compensator: "WIHC",
+                ..
+            }
+        ),
         "{err:?}"
     );
-    assert!(Wihc::<f64, Vec<f64>>::new(&m, unit_limits(), SolveMode::Exact).is_ok());
+    for mode in [
+        SolveMode::Exact,
+        SolveMode::DelayedGuarded,
+        SolveMode::DelayedAllowUnstable,
+    ] {
+        assert!(Wihc::<f64, Vec<f64>>::new(&m, unit_limits(), mode).is_ok());
+    }
 }
 
 #[test]
@@ -394,9 +419,10 @@ proptest! {
         let mut rng = rng(seed);
         let plant = random_invertible_model(&mut rng, n);
         let limits = OutputLimits::new(0.0, 1.0).unwrap();
-        let ihc = Ihc::<f64, Vec<f64>>::new(&plant, limits, SolveMode::Delayed);
+        // The unchecked loop: the classification must hold whatever the loop gain.
+        let ihc = Ihc::<f64, Vec<f64>>::new(&plant, limits, SolveMode::DelayedAllowUnstable);
         prop_assert!(ihc.is_ok(), "delayed IHC refused an invertible model: {:?}", ihc.err());
-        let (wihc_plant, wihc) = match Wihc::<f64, Vec<f64>>::new(&plant, limits, SolveMode::Delayed) {
+        let (wihc_plant, wihc) = match Wihc::<f64, Vec<f64>>::new(&plant, limits, SolveMode::DelayedAllowUnstable) {
             Ok(c) => (plant.clone(), c),
             Err(_) => {
                 let contracting = random_model_with_gain_below(&mut rng, n, 0.9);
@@ -492,7 +518,12 @@ proptest! {
 fn table1_delayed_wihc_gain_exceeds_one_and_its_ringing_is_not_called_unreachable() {
     let plant = table1();
     let limits = unit_limits();
-    let mut delayed: VecWihc = Wihc::new(&plant, limits, SolveMode::Delayed).unwrap();
+    // Refused by the checked mode, built when asked explicitly.
+    assert!(matches!(
+        Wihc::<f64, Vec<f64>>::new(&plant, limits, SolveMode::Delayed),
+        Err(CoreError::DelayedLoopUnstable { .. })
+    ));
+    let mut delayed: VecWihc = Wihc::new(&plant, limits, SolveMode::DelayedAllowUnstable).unwrap();
     let gain = delayed.delayed_loop_gain();
     // All ten operators moving near x = 0: (b_1 + ... + b_10) / a2 = 0.7639 / 0.4603.
     let all: f64 = TABLE1_B.iter().sum();

@@ -22,6 +22,7 @@
 use std::fmt;
 use std::time::Instant;
 
+use hystcomp_core::CoreError;
 use hystcomp_identify::{
     Identification, IdentifyError, IdentifyOptions, Method as Solver, Progress, PsoOptions,
     Thresholds, Warmup, identify_observed,
@@ -210,6 +211,11 @@ pub struct TrackingRun {
     /// (% of the `y_d` range): how much of the tracking error is model mismatch. `None` for
     /// DIHC and the uncompensated run (no plant model in the loop).
     pub model_mismatch_rms_percent: Option<f64>,
+    /// Why the run is not what its label says, if it is not: a plain delayed loop refused on
+    /// its model (loop gain of 1 or more: it could ring), replaced by its guarded form, which
+    /// never oscillates (`method` says which ran).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub note: Option<String>,
 }
 
 /// How much the indices move when only the sensor noise changes: the uncompensated run and
@@ -654,10 +660,29 @@ pub fn run_study(
         .into_par_iter()
         .map(
             |(label, method, model)| -> Result<TrackingRun, StudyError> {
+                let mut note = None;
+                let mut method = method;
                 let (command_v, saturated) = match (method, model) {
-                    (Some(method), Some(model)) => {
-                        drive(model, method, &desired, full_scale, &label)?
-                    }
+                    (Some(m), Some(model)) => match drive(model, m, &desired, full_scale, &label) {
+                        // A plain delayed loop that could ring on its model is refused with
+                        // the reason; its guarded form, which never oscillates, runs instead.
+                        Err(StudyError::Compensator {
+                            error:
+                                CompensatorError::Core(
+                                    refusal @ CoreError::DelayedLoopUnstable { .. },
+                                ),
+                            ..
+                        }) if m.guarded().is_some() => {
+                            let guarded = m.guarded().unwrap_or(m);
+                            note = Some(format!(
+                                "{m} refused: {refusal}; {guarded} (the guarded delayed loop) \
+                                 ran instead"
+                            ));
+                            method = Some(guarded);
+                            drive(model, guarded, &desired, full_scale, &label)?
+                        }
+                        other => other?,
+                    },
                     _ => (desired.iter().map(|y| y * gain).collect(), 0),
                 };
                 let measured = track(&options.stage, tracking_seed, &command_v)?;
@@ -691,6 +716,7 @@ pub fn run_study(
                     indices,
                     saturated,
                     model_mismatch_rms_percent,
+                    note,
                 })
             },
         )

@@ -1503,8 +1503,8 @@ pub fn write_outputs(
                 notes: p
                     .runs
                     .iter()
-                    .filter(|r| r.saturated > 0)
-                    .map(|r| {
+                    .filter_map(|r| r.note.as_ref().map(|n| format!("{}: {n}", r.label)))
+                    .chain(p.runs.iter().filter(|r| r.saturated > 0).map(|r| {
                         format!(
                             "{}: {} {} clamped to the drive limits",
                             r.label,
@@ -1515,7 +1515,7 @@ pub fn write_outputs(
                                 "samples"
                             }
                         )
-                    })
+                    }))
                     .collect(),
             }
         })

@@ -6,13 +6,13 @@
 //! exactly the applied voltage, so the replay error tells, before touching hardware, how each
 //! compensator would do on the device the records come from.
 
-use hystcomp_io::compensator::{Method, ScaledCompensator};
+use hystcomp_io::compensator::{Method, ScaledCompensator, UnstableDelay};
 use hystcomp_io::data::{check_finite, check_min_samples, check_not_constant, check_same_length};
 use hystcomp_io::model_file::{Direction, ModelFile};
 use serde::{Deserialize, Serialize};
 
 use crate::identification::{auto_warmup, min_max, minimum_fit_samples, parameter_count};
-use crate::report::{ErrorStats, FitReport};
+use crate::report::{DelayedGains, ErrorStats, FitReport};
 use crate::{IdentifyError, IdentifyOptions, Observer, OutputOffset, Warmup, identify_observed};
 
 /// One record: the drive voltage and the measured displacement, one pair per sample.
@@ -49,12 +49,17 @@ pub struct CrossvalOptions {
     /// at the first sample whose voltage is within 5 % of the test record's voltage range from
     /// its minimum (see [`Warmup::Auto`]).
     pub test_warmup: Warmup,
+    /// Whether the plain delayed compensators (`ihc-delayed`, `wihc-delayed`) are replayed
+    /// even when their loop gain over the limits is 1 or more (by default they are reported as
+    /// not built, with the reason).
+    #[serde(default)]
+    pub unstable_delay: UnstableDelay,
 }
 
 /// The replay of one compensator over the test record.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct Replay {
-    /// `ihc`, `ihc-delayed`, `wihc`, `wihc-delayed` or `dihc`.
+    /// `ihc`, `ihc-delayed`, `wihc`, `wihc-delayed`, `dihc`, `ihc-guarded` or `wihc-guarded`.
     pub compensator: String,
     /// Returned minus applied voltage over the evaluated span, in % of the test record's
     /// voltage range there. `None` when the compensator could not be built.
@@ -94,6 +99,10 @@ pub struct Validation {
     /// The output limits of the compensators: the voltage range the plant model was fitted on
     /// (physical; the training record after its warm-up, without its hold-out).
     pub voltage_limits: [f64; 2],
+    /// The gains of the plant model's delayed IHC and WIHC loops over the voltage limits (at
+    /// or above 1 the plain delayed loop can ring, and is not built unless allowed).
+    #[serde(default)]
+    pub delayed_loop_gains: Option<DelayedGains>,
     /// Test samples whose voltage lies outside the plant model's input range (the model
     /// extrapolates there).
     pub voltage_outside_model_range: usize,
@@ -150,6 +159,7 @@ pub fn crossval(
         limits,
         test,
         options.test_warmup,
+        options.unstable_delay,
     )?;
     Ok(CrossValidation {
         report: CrossvalReport {
@@ -166,8 +176,10 @@ pub fn crossval(
 ///
 /// - (a) the plant model's prediction of the measured displacement from the applied voltage;
 /// - (b) the offline inverse replay (see the [module documentation](self)) of IHC and WIHC
-///   (exact and delayed, from the plant model) and DIHC (from the inverse model), with output
-///   limits `voltage_limits` (physical; the training record's voltage range).
+///   (exact, delayed and guarded delayed, from the plant model) and DIHC (from the inverse
+///   model), with output limits `voltage_limits` (physical; the training record's voltage
+///   range). A plain delayed loop whose gain over the limits is 1 or more is not built (the
+///   replay says why) unless `unstable_delay` allows it.
 ///
 /// Everything starts from its reset state at the first sample; errors are taken after the
 /// warm-up, over at least as many samples as identifying the plant model needs
@@ -181,6 +193,7 @@ pub fn validate_models(
     voltage_limits: [f64; 2],
     test: Record<'_>,
     warmup: Warmup,
+    unstable_delay: UnstableDelay,
 ) -> Result<Validation, IdentifyError> {
     test.check()?;
     let wrong = |what: &str, file: &ModelFile, expected: Direction| {
@@ -260,10 +273,11 @@ pub fn validate_models(
             Direction::Plant => plant,
             Direction::Inverse => inverse,
         };
-        let mut compensator = match ScaledCompensator::new(
+        let mut compensator = match ScaledCompensator::with_unstable_delay(
             file,
             method,
             Some((voltage_limits[0], voltage_limits[1])),
+            unstable_delay,
         ) {
             Ok(c) => c,
             Err(e) => {
@@ -313,10 +327,18 @@ pub fn validate_models(
         });
     }
 
+    let delayed_loop_gains = plant.model().ok().map(|model| {
+        DelayedGains::of(
+            &model,
+            plant.normalise_input(voltage_limits[0]),
+            plant.normalise_input(voltage_limits[1]),
+        )
+    });
     Ok(Validation {
         samples,
         warmup: start,
         voltage_limits,
+        delayed_loop_gains,
         voltage_outside_model_range,
         displacement_outside_model_range,
         forward,

@@ -10,7 +10,7 @@ use serde::{Deserialize, Serialize};
 use crate::options::{
     AUTO_WARMUP_LEVEL, MAX_REGRESSOR_VALUES, MIN_CORRELATION, SAMPLES_PER_PARAMETER,
 };
-use crate::report::{ErrorStats, FitReport, SampleCounts, SignalRange};
+use crate::report::{DelayedGains, ErrorStats, FitReport, SampleCounts, SignalRange};
 use crate::{
     FitProblem, IdentifyError, IdentifyOptions, LeastSquares, Method, NoObserver, Observer,
     OutputOffset, Parameters, ParticleSwarm, ProblemData, Solver, Warmup,
@@ -205,7 +205,9 @@ pub fn identify_observed(
     let slope = model.check_invertible(0.0, 1.0)?;
     if options.direction == Direction::Plant {
         let limits = OutputLimits::new(0.0, 1.0)?;
-        for mode in [SolveMode::Exact, SolveMode::Delayed] {
+        // The exact and the guarded delayed loops build on every invertible model; the plain
+        // delayed ones only when their loop gain is below 1 (reported, not required).
+        for mode in [SolveMode::Exact, SolveMode::DelayedGuarded] {
             Ihc::<f64, Vec<f64>>::new(&model, limits, mode)?.reset();
             Wihc::<f64, Vec<f64>>::new(&model, limits, mode)?.reset();
         }
@@ -275,6 +277,8 @@ pub fn identify_observed(
         violated_constraints: problem.violated_count(&solution.theta),
         margin: options.margin,
         min_branch_slope: slope.slope,
+        delayed_loop_gains: (options.direction == Direction::Plant)
+            .then(|| DelayedGains::of(&model, 0.0, 1.0)),
         pso: match &options.method {
             Method::ParticleSwarm(pso) => Some(pso.clone()),
             Method::LeastSquares => None,

@@ -102,5 +102,5 @@ pub use pso::{
     CONSTRICTION_ACCELERATION, CONSTRICTION_INERTIA, MAX_ITERATIONS, MAX_PARTICLES, ParticleSwarm,
     PsoBounds, PsoOptions,
 };
-pub use report::{ErrorStats, FitReport, SampleCounts, SignalRange};
+pub use report::{DelayedGains, ErrorStats, FitReport, SampleCounts, SignalRange};
 pub use solver::{NoObserver, Observer, Progress, Solution, Solver};

@@ -58,6 +58,34 @@ impl ErrorStats {
     }
 }
 
+/// The worst-case gains of the two one-sample-delayed loops a plant model gives (see
+/// `hystcomp_core::Mpim::delayed_ihc_loop_gain` and `delayed_wihc_loop_gain`), over a drive
+/// range. Below 1 the delayed loop settles after any jump in the desired position; at or above
+/// 1 it can ring between the limits, and `hystcomp compensate` refuses it unless
+/// `--allow-unstable-delay` is given.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct DelayedGains {
+    /// The delayed IHC's: `max |g'(x) - a2| / (a2 + b_1 + ... + b_k)`.
+    pub ihc: f64,
+    /// The delayed WIHC's: `max |g'(x) - a2 + b_1 + ... + b_k| / a2`.
+    pub wihc: f64,
+}
+
+impl DelayedGains {
+    /// Both gains of `plant` over the normalised drive range `[lo, hi]` (NaN where the core
+    /// cannot compute one: a model that is not invertible there).
+    pub fn of(plant: &hystcomp_core::Mpim<f64, Vec<f64>>, lo: f64, hi: f64) -> Self {
+        DelayedGains {
+            ihc: plant
+                .delayed_ihc_loop_gain(lo, hi)
+                .map_or(f64::NAN, |g| g.gain),
+            wihc: plant
+                .delayed_wihc_loop_gain(lo, hi)
+                .map_or(f64::NAN, |g| g.gain),
+        }
+    }
+}
+
 /// The physical range of one signal of a record.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct SignalRange {
@@ -128,6 +156,10 @@ pub struct FitReport {
     pub margin: f64,
     /// The smallest branch slope of the model over its input range (the core's check).
     pub min_branch_slope: f64,
+    /// Plant models: the gains of the delayed IHC and WIHC over the fitted voltage range
+    /// (below 1: both delayed loops settle after any jump). `None` for inverse models.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub delayed_loop_gains: Option<DelayedGains>,
     /// The swarm's settings, when the solver was `pso`.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub pso: Option<PsoOptions>,

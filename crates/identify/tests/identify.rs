@@ -9,7 +9,7 @@ use hystcomp_identify::{
     OutputOffset, ParticleSwarm, ProblemData, PsoOptions, Record, Solver, Thresholds, Validation,
     Warmup, crossval, identify, validate_models,
 };
-use hystcomp_io::compensator::{Method as CompensatorMethod, ScaledCompensator};
+use hystcomp_io::compensator::{Method as CompensatorMethod, ScaledCompensator, UnstableDelay};
 use hystcomp_io::model_file::{Direction, ModelFile, Scale};
 use proptest::prelude::*;
 use proptest::test_runner::{Config, RngSeed};
@@ -176,10 +176,21 @@ proptest! {
                 }
                 let limits = OutputLimits::new(0.0, 1.0).unwrap();
                 if direction == Direction::Plant {
-                    for mode in [SolveMode::Exact, SolveMode::Delayed] {
+                    // The exact and guarded loops build on every invertible model; the plain
+                    // delayed ones exactly when the report's gains are below 1.
+                    for mode in [SolveMode::Exact, SolveMode::DelayedGuarded] {
                         prop_assert!(Ihc::<f64, Vec<f64>>::new(&m, limits, mode).is_ok());
                         prop_assert!(Wihc::<f64, Vec<f64>>::new(&m, limits, mode).is_ok());
                     }
+                    let gains = fit.report.delayed_loop_gains.expect("a plant model's gains");
+                    prop_assert_eq!(
+                        Ihc::<f64, Vec<f64>>::new(&m, limits, SolveMode::Delayed).is_ok(),
+                        gains.ihc < 1.0
+                    );
+                    prop_assert_eq!(
+                        Wihc::<f64, Vec<f64>>::new(&m, limits, SolveMode::Delayed).is_ok(),
+                        gains.wihc < 1.0
+                    );
                 } else {
                     prop_assert!(Dihc::<f64, Vec<f64>>::new(&m, 0.0, 1.0, limits).is_ok());
                 }
@@ -490,8 +501,27 @@ fn crossval_replays_the_exact_compensators_without_error_on_noise_free_data() {
     let t = &cv.report.test;
     assert!(t.forward.rms_percent < 1e-7, "{}", t.forward.rms_percent);
     assert_eq!(t.voltage_outside_model_range, 0);
-    assert_eq!(t.replay.len(), 5);
+    assert_eq!(t.replay.len(), 7);
+    let gains = t
+        .delayed_loop_gains
+        .expect("the plant model's delayed gains");
     for r in &t.replay {
+        // A plain delayed loop that can ring is not built, with the reason.
+        let refused = match r.compensator.as_str() {
+            "ihc-delayed" => gains.ihc >= 1.0,
+            "wihc-delayed" => gains.wihc >= 1.0,
+            _ => false,
+        };
+        if refused {
+            assert!(
+                r.error.is_none()
+                    && r.failure
+                        .as_deref()
+                        .is_some_and(|f| f.contains("can oscillate")),
+                "{r:?}"
+            );
+            continue;
+        }
         let e = r.error.expect("every compensator is built");
         assert!(e.rms_percent.is_finite());
         match r.compensator.as_str() {
@@ -681,8 +711,31 @@ fn replay_counts_the_delayed_loops_clamps_after_a_jump() {
         voltage: &voltage,
         displacement: &displacement,
     };
-    let report =
-        validate_models(&plant, &inverse, [0.0, 10.0], record, Warmup::Samples(0)).unwrap();
+    // Table 1's delayed WIHC (gain 1.66) is replayed only when allowed.
+    let refused = validate_models(
+        &plant,
+        &inverse,
+        [0.0, 10.0],
+        record,
+        Warmup::Samples(0),
+        UnstableDelay::Refuse,
+    )
+    .unwrap();
+    let row = refused
+        .replay
+        .iter()
+        .find(|r| r.compensator == "wihc-delayed")
+        .unwrap();
+    assert!(row.error.is_none() && row.failure.is_some(), "{row:?}");
+    let report = validate_models(
+        &plant,
+        &inverse,
+        [0.0, 10.0],
+        record,
+        Warmup::Samples(0),
+        UnstableDelay::Allow,
+    )
+    .unwrap();
     for r in &report.replay {
         // The same counts as a direct replay through the compensator.
         let method: CompensatorMethod = r.compensator.parse().unwrap();
@@ -691,7 +744,13 @@ fn replay_counts_the_delayed_loops_clamps_after_a_jump() {
         } else {
             &plant
         };
-        let mut direct = ScaledCompensator::new(file, method, Some((0.0, 10.0))).unwrap();
+        let mut direct = ScaledCompensator::with_unstable_delay(
+            file,
+            method,
+            Some((0.0, 10.0)),
+            UnstableDelay::Allow,
+        )
+        .unwrap();
         displacement.iter().for_each(|&y| {
             direct.step(y);
         });
@@ -703,13 +762,22 @@ fn replay_counts_the_delayed_loops_clamps_after_a_jump() {
         );
         match r.compensator.as_str() {
             "wihc-delayed" => assert!(r.loop_saturated > 0, "{r:?}"),
-            "ihc" | "wihc" => assert_eq!(r.loop_saturated, 0, "{r:?}"),
+            "ihc" | "wihc" | "ihc-guarded" | "wihc-guarded" => {
+                assert_eq!(r.loop_saturated, 0, "{r:?}")
+            }
             _ => {}
         }
     }
     // After a warm-up past the ringing, none of it is counted.
-    let settled =
-        validate_models(&plant, &inverse, [0.0, 10.0], record, Warmup::Samples(1000)).unwrap();
+    let settled = validate_models(
+        &plant,
+        &inverse,
+        [0.0, 10.0],
+        record,
+        Warmup::Samples(1000),
+        UnstableDelay::Allow,
+    )
+    .unwrap();
     let wihc_delayed = |v: &Validation| {
         v.replay
             .iter()

@@ -111,8 +111,10 @@ fn dbo_crossval_within_sane_bounds() {
         return;
     };
     // Measured: plant (RMS, max), inverse (RMS, max), forward (RMS, max), then each replay
-    // (RMS, max) in the order of `Method::ALL`: ihc, ihc-delayed, wihc, wihc-delayed, dihc.
-    let measured = |name: &str| -> [[f64; 2]; 8] {
+    // (RMS, max) in the order of `Method::ALL`: ihc, ihc-delayed, wihc, wihc-delayed, dihc,
+    // ihc-guarded, wihc-guarded. NaN: not built (a plain delayed loop whose gain is 1 or
+    // more on the model: the delayed WIHC, 3.15 with least squares, 1.57 with the swarm).
+    let measured = |name: &str| -> [[f64; 2]; 10] {
         if name == "ls" {
             [
                 [0.681, 2.511],
@@ -121,8 +123,10 @@ fn dbo_crossval_within_sane_bounds() {
                 [1.801, 5.933],
                 [1.789, 5.985],
                 [1.801, 5.933],
-                [2.021, 5.720],
+                [f64::NAN, f64::NAN],
                 [1.672, 6.020],
+                [1.789, 5.985],
+                [2.219, 6.598],
             ]
         } else {
             [
@@ -132,8 +136,10 @@ fn dbo_crossval_within_sane_bounds() {
                 [2.331, 7.164],
                 [2.354, 7.166],
                 [2.331, 7.164],
-                [2.227, 7.117],
+                [f64::NAN, f64::NAN],
                 [2.338, 9.047],
+                [2.354, 7.166],
+                [3.036, 8.613],
             ]
         }
     };
@@ -206,9 +212,15 @@ fn dbo_crossval_within_sane_bounds() {
             [t.forward.rms_percent, t.forward.max_percent],
             m[2],
         );
-        assert_eq!(t.replay.len(), 5);
+        assert_eq!(t.replay.len(), 7);
         for (r, m) in t.replay.iter().zip(&m[3..]) {
-            let e = r.error.expect("every compensator is built");
+            if m[0].is_nan() {
+                let failure = r.failure.as_deref().unwrap_or("");
+                assert!(failure.contains("can oscillate"), "{r:?}");
+                eprintln!("    replay {:13} not built: {failure}", r.compensator);
+                continue;
+            }
+            let e = r.error.expect("every other compensator is built");
             within(
                 &format!("{name} replay {}", r.compensator),
                 [e.rms_percent, e.max_percent],

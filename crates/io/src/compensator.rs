@@ -13,31 +13,53 @@ use serde::{Deserialize, Serialize};
 
 use crate::model_file::{Direction, ModelFile, Scale};
 
-/// The five compensators of the toolkit (section 3 of the paper, with the exact and the
-/// delayed solution of the implicit laws).
+/// The compensators of the toolkit (section 3 of the paper, with the exact, the delayed and the
+/// guarded delayed solution of the implicit laws).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize)]
 #[serde(rename_all = "kebab-case")]
 pub enum Method {
     /// IHC, eqs. (5)-(8), implicit equation solved exactly each sample.
     Ihc,
-    /// IHC with `v(t - Ts)` in the cubic term (real-time Simulink style).
+    /// IHC with `v(t - Ts)` in the cubic term (real-time Simulink style); refused on a model
+    /// whose delayed loop gain reaches 1 unless allowed explicitly ([`UnstableDelay::Allow`]).
     IhcDelayed,
     /// WIHC, eq. (9), implicit equation solved exactly each sample.
     Wihc,
-    /// WIHC with `H[v](t - Ts)` (real-time Simulink style).
+    /// WIHC with `H[v](t - Ts)` (real-time Simulink style); refused on a model whose delayed
+    /// loop gain reaches 1 unless allowed explicitly ([`UnstableDelay::Allow`]).
     WihcDelayed,
     /// DIHC, eq. (10): an inverse model evaluated on the desired trajectory.
     Dihc,
+    /// The delayed IHC with its guard: an under-relaxed update that cannot oscillate on any
+    /// model ([`hystcomp_core::SolveMode::DelayedGuarded`]).
+    IhcGuarded,
+    /// The delayed WIHC with its guard ([`hystcomp_core::SolveMode::DelayedGuarded`]).
+    WihcGuarded,
+}
+
+/// What to do with a delayed method (`ihc-delayed`, `wihc-delayed`) on a model whose delayed
+/// loop gain over the drive limits is 1 or more, so that the loop can ring between the limits.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum UnstableDelay {
+    /// Refuse it ([`hystcomp_core::CoreError::DelayedLoopUnstable`]): the default.
+    #[default]
+    Refuse,
+    /// Build it anyway (the command line's `--allow-unstable-delay`): the drive still never
+    /// leaves its limits, but may ring between them after a jump in the desired position.
+    Allow,
 }
 
 impl Method {
-    /// Every method, in the order of the paper.
-    pub const ALL: [Method; 5] = [
+    /// Every method: the paper's five in its order, then the guarded delayed loops.
+    pub const ALL: [Method; 7] = [
         Method::Ihc,
         Method::IhcDelayed,
         Method::Wihc,
         Method::WihcDelayed,
         Method::Dihc,
+        Method::IhcGuarded,
+        Method::WihcGuarded,
     ];
 
     /// The name used on the command line and in files: `ihc`, `ihc-delayed`, ...
@@ -48,15 +70,43 @@ impl Method {
             Method::Wihc => "wihc",
             Method::WihcDelayed => "wihc-delayed",
             Method::Dihc => "dihc",
+            Method::IhcGuarded => "ihc-guarded",
+            Method::WihcGuarded => "wihc-guarded",
         }
     }
 
-    /// How the implicit law is solved: exactly, or with the loop broken by one sample (DIHC has
-    /// no implicit law; it reports `Exact`).
+    /// How the implicit law is solved: exactly, with the loop broken by one sample (refused at
+    /// a loop gain of 1 or more), or with the guarded delayed loop (DIHC has no implicit law;
+    /// it reports `Exact`).
     pub fn solve_mode(self) -> SolveMode {
         match self {
             Method::IhcDelayed | Method::WihcDelayed => SolveMode::Delayed,
+            Method::IhcGuarded | Method::WihcGuarded => SolveMode::DelayedGuarded,
             _ => SolveMode::Exact,
+        }
+    }
+
+    /// `true` for the plain delayed loops (`ihc-delayed`, `wihc-delayed`), which
+    /// [`UnstableDelay`] concerns.
+    pub fn is_plain_delayed(self) -> bool {
+        self.solve_mode() == SolveMode::Delayed
+    }
+
+    /// The exact method of the same family (`ihc` for every IHC, `wihc` for every WIHC).
+    pub fn exact(self) -> Method {
+        match self {
+            Method::Ihc | Method::IhcDelayed | Method::IhcGuarded => Method::Ihc,
+            Method::Wihc | Method::WihcDelayed | Method::WihcGuarded => Method::Wihc,
+            Method::Dihc => Method::Dihc,
+        }
+    }
+
+    /// The guarded delayed method of the same family (`None` for DIHC).
+    pub fn guarded(self) -> Option<Method> {
+        match self.exact() {
+            Method::Ihc => Some(Method::IhcGuarded),
+            Method::Wihc => Some(Method::WihcGuarded),
+            _ => None,
         }
     }
 
@@ -90,7 +140,8 @@ impl FromStr for Method {
 /// Why a compensator could not be built from a model file.
 #[derive(Debug, Clone, PartialEq)]
 pub enum CompensatorError {
-    /// Not one of `ihc`, `ihc-delayed`, `wihc`, `wihc-delayed`, `dihc`.
+    /// Not one of `ihc`, `ihc-delayed`, `wihc`, `wihc-delayed`, `dihc`, `ihc-guarded`,
+    /// `wihc-guarded`.
     UnknownMethod(String),
     /// The method needs the other direction of model.
     WrongDirection {
@@ -117,7 +168,8 @@ impl fmt::Display for CompensatorError {
         match self {
             CompensatorError::UnknownMethod(s) => write!(
                 f,
-                "unknown method {s:?}; choose one of ihc, ihc-delayed, wihc, wihc-delayed, dihc"
+                "unknown method {s:?}; choose one of ihc, ihc-delayed, wihc, wihc-delayed, dihc, \
+                 ihc-guarded, wihc-guarded"
             ),
             CompensatorError::WrongDirection { method, found } => write!(
                 f,
@@ -194,8 +246,10 @@ pub struct ScaledCompensator {
     /// Physical meaning of the control (the compensator's output).
     control: Scale,
     limits: (f64, f64),
-    /// The worst-case loop gain of the delayed WIHC, for `wihc` and `wihc-delayed`.
+    /// The worst-case gain of the family's delayed loop over the limits (IHC and WIHC).
     delayed_loop_gain: Option<f64>,
+    /// The under-relaxation of the family's guarded delayed loop (IHC and WIHC).
+    guard_relaxation: Option<f64>,
     /// DIHC: the desired positions the inverse model accepts, physical units.
     desired_range: Option<(f64, f64)>,
     /// The vibration inverse's preview, samples (0 without a vibration link): `step`'s output
@@ -223,12 +277,15 @@ impl ScaledCompensator {
     /// reverse order (`hystcomp_core::ChainCompensator`): the vibration inverse with the
     /// preview an offline inversion needs ([`ScaledCompensator::with_preview`] chooses
     /// another), the creep inverse, then `method`. It runs at the model's `sample_rate_hz`.
+    /// `input_range`; an inverse model's normalised output range [0, 1]). A plain delayed
+    /// method on a model whose delayed loop can oscillate (gain of 1 or more) is refused; see
+    /// [`ScaledCompensator::with_unstable_delay`].
     pub fn new(
         model: &ModelFile,
         method: Method,
         limits: Option<(f64, f64)>,
     ) -> Result<Self, CompensatorError> {
-        Self::with_preview(model, method, limits, None)
+        Self::with_options(model, method, limits, None, UnstableDelay::Refuse)
     }
 
     /// As [`ScaledCompensator::new`], with the vibration inverse's preview `preview` samples
@@ -239,6 +296,31 @@ impl ScaledCompensator {
         method: Method,
         limits: Option<(f64, f64)>,
         preview: Option<usize>,
+    ) -> Result<Self, CompensatorError> {
+        Self::with_options(model, method, limits, preview, UnstableDelay::Refuse)
+    }
+
+    /// As [`ScaledCompensator::new`], saying what to do with a plain delayed method
+    /// (`ihc-delayed`, `wihc-delayed`) whose loop gain over the limits is 1 or more:
+    /// [`UnstableDelay::Refuse`] (as `new`) or [`UnstableDelay::Allow`], the explicit override.
+    /// The other methods ignore it.
+    pub fn with_unstable_delay(
+        model: &ModelFile,
+        method: Method,
+        limits: Option<(f64, f64)>,
+        unstable: UnstableDelay,
+    ) -> Result<Self, CompensatorError> {
+        Self::with_options(model, method, limits, None, unstable)
+    }
+
+    /// [`ScaledCompensator::with_preview`] and [`ScaledCompensator::with_unstable_delay`] in
+    /// one.
+    pub fn with_options(
+        model: &ModelFile,
+        method: Method,
+        limits: Option<(f64, f64)>,
+        preview: Option<usize>,
+        unstable: UnstableDelay,
     ) -> Result<Self, CompensatorError> {
         if model.direction != method.needs() {
             return Err(CompensatorError::WrongDirection {
@@ -266,18 +348,24 @@ impl ScaledCompensator {
             });
         }
         let normalised = OutputLimits::new(control.normalise(min), control.normalise(max))?;
-        let mpim: Mpim<f64, Vec<f64>> =
-            Mpim::new(&model.thresholds, &model.weights, model.a1, model.a2)?;
+        let mpim: Mpim<f64, Vec<f64>> = model.core_model()?;
+        let mode = match (method.solve_mode(), unstable) {
+            (SolveMode::Delayed, UnstableDelay::Allow) => SolveMode::DelayedAllowUnstable,
+            (mode, _) => mode,
+        };
         let mut delayed_loop_gain = None;
+        let mut guard_relaxation = None;
         let inner: Box<dyn Compensator<f64> + Send> = match method {
-            Method::Ihc | Method::IhcDelayed => Box::new(Ihc::<f64, Vec<f64>>::new(
-                &mpim,
-                normalised,
-                method.solve_mode(),
-            )?),
-            Method::Wihc | Method::WihcDelayed => {
-                let wihc = Wihc::<f64, Vec<f64>>::new(&mpim, normalised, method.solve_mode())?;
+            Method::Ihc | Method::IhcDelayed | Method::IhcGuarded => {
+                let ihc = Ihc::<f64, Vec<f64>>::new(&mpim, normalised, mode)?;
+                delayed_loop_gain = Some(ihc.delayed_loop_gain().gain);
+                guard_relaxation = Some(ihc.guard_relaxation());
+                Box::new(ihc)
+            }
+            Method::Wihc | Method::WihcDelayed | Method::WihcGuarded => {
+                let wihc = Wihc::<f64, Vec<f64>>::new(&mpim, normalised, mode)?;
                 delayed_loop_gain = Some(wihc.delayed_loop_gain().gain);
+                guard_relaxation = Some(wihc.guard_relaxation());
                 Box::new(wihc)
             }
             Method::Dihc => Box::new(Dihc::<f64, Vec<f64>>::new(
@@ -323,6 +411,7 @@ impl ScaledCompensator {
             control,
             limits: (min, max),
             delayed_loop_gain,
+            guard_relaxation,
             desired_range,
             preview: preview_samples,
         })
@@ -356,13 +445,22 @@ impl ScaledCompensator {
         self.limits
     }
 
-    /// For `wihc` and `wihc-delayed`: the worst-case small-signal loop gain of the delayed
-    /// WIHC over the drive limits, `max |3 a1 x^2 + b_1 + ... + b_k| / a2` (eq. (9) with
-    /// `H[v](t - Ts)`; see [`hystcomp_core::Wihc::delayed_loop_gain`]). At or above 1 the
-    /// delayed loop can ring between the limits after a jump in the desired position; the
-    /// exact `wihc` does not. `None` for the other methods.
+    /// For the IHC and WIHC methods: the worst-case small-signal gain of the family's
+    /// one-sample-delayed loop over the drive limits (whatever the method's own mode), see
+    /// [`hystcomp_core::Ihc::delayed_loop_gain`] (`max |g'(x) - a2| / (a2 + b_1 + ... + b_k)`)
+    /// and [`hystcomp_core::Wihc::delayed_loop_gain`] (`max |g'(x) - a2 + b_1 + ... + b_k| /
+    /// a2`). At or above 1 the plain delayed loop can ring between the limits after a jump in
+    /// the desired position (and is refused unless allowed); the exact and the guarded ones do
+    /// not. `None` for DIHC.
     pub fn delayed_loop_gain(&self) -> Option<f64> {
         self.delayed_loop_gain
+    }
+
+    /// For the IHC and WIHC methods: the under-relaxation of the family's guarded delayed loop
+    /// on this model and limits, in `(0, 1]` (1: the guarded loop is the plain one). `None`
+    /// for DIHC.
+    pub fn guard_relaxation(&self) -> Option<f64> {
+        self.guard_relaxation
     }
 
     /// For `dihc`: the range of desired positions (physical units, increasing) the inverse

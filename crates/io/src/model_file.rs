@@ -29,9 +29,13 @@
 //! - `input_range`: the normalised input range the model was identified on and is invertible on
 //!   (`[0, 1]` when the thresholds are fractions of the input range, eq. (11)).
 //! - `thresholds`, `weights`, `a1`, `a2`: the normalised MPIM parameters of eq. (4).
+//! - `input_polynomial` (optional, format 2): the input function `g(x) = c_1 x + c_2 x^2 + ...
+//!   + c_D x^D` as `[c_1, ..., c_D]` when it is not the paper's cubic `a1 x^3 + a2 x` (at most
+//!   degree [`hystcomp_core::MAX_INPUT_DEGREE`]); `a2` must equal `c_1` and `a1` must equal
+//!   `c_3` (0 below degree 3), so that readers that know only `a1` and `a2` read them right.
 //! - `identification`: optional free-form JSON (solver, fit errors, data source...).
 //!
-//! # Format version 2: creep and vibration (optional)
+//! # Format version 2: a higher-degree input polynomial, creep and vibration (optional)
 //! Version 1 files hold the MPIM alone and still load (they are written back as version 2,
 //! which differs only by the optional parts below). A file without `creep` and `vibration` is
 //! the hysteresis-only model of version 1.
@@ -61,7 +65,9 @@
 use std::fmt;
 use std::path::Path;
 
-use hystcomp_core::{CoreError, Creep, CreepInverse, Mpim, Vibration, VibrationInverse};
+use hystcomp_core::{
+    CoreError, Creep, CreepInverse, InputPolynomial, Mpim, Vibration, VibrationInverse,
+};
 use serde::{Deserialize, Serialize};
 
 use crate::atomic::write_atomic;
@@ -237,6 +243,10 @@ pub struct ModelFile {
     pub a1: f64,
     /// Linear coefficient `a2`.
     pub a2: f64,
+    /// The whole input polynomial `[c_1, ..., c_D]` when it is not the paper's cubic
+    /// (`c_1 = a2`, `c_3 = a1`); absent for the cubic. Format version 2.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub input_polynomial: Option<Vec<f64>>,
     /// The sample rate of the record the time-dependent parts were identified on, Hz
     /// (format version 2; required with `creep` or `vibration`).
     #[serde(default, skip_serializing_if = "Option::is_none")]
@@ -375,6 +385,7 @@ impl ModelFile {
             weights,
             a1,
             a2,
+            input_polynomial: None,
             sample_rate_hz: None,
             creep: None,
             vibration: None,
@@ -408,7 +419,7 @@ impl ModelFile {
         self.creep.is_some() || self.vibration.is_some()
     }
 
-    /// A model file for `model` (its parameters; not its memory).
+    /// A model file for `model` (its parameters, input polynomial included; not its memory).
     pub fn from_model(
         direction: Direction,
         input: Scale,
@@ -416,7 +427,7 @@ impl ModelFile {
         input_range: [f64; 2],
         model: &Mpim<f64, Vec<f64>>,
     ) -> Result<Self, ModelFileError> {
-        ModelFile::new(
+        let mut file = ModelFile::new(
             direction,
             input,
             output,
@@ -425,7 +436,13 @@ impl ModelFile {
             model.weights().to_vec(),
             model.a1(),
             model.a2(),
-        )
+        )?;
+        let polynomial = model.input_polynomial();
+        if !polynomial.is_odd_cubic() {
+            file.input_polynomial = Some(polynomial.coefficients().to_vec());
+            file.validate()?;
+        }
+        Ok(file)
     }
 
     /// Checks the version, the scales (finite, `scale` in [`SCALE_RANGE`], `|offset|` at most
@@ -487,6 +504,24 @@ impl ModelFile {
                 ),
             });
         }
+        if let Some(c) = &self.input_polynomial {
+            if self.format_version < 2 {
+                return Err(ModelFileError::Invalid {
+                    message: "input_polynomial needs format_version 2".to_owned(),
+                });
+            }
+            let c1 = c.first().copied().unwrap_or(f64::NAN);
+            let c3 = c.get(2).copied().unwrap_or(0.0);
+            if c1 != self.a2 || c3 != self.a1 {
+                return Err(ModelFileError::Invalid {
+                    message: format!(
+                        "input_polynomial [c_1, c_2, ...] must agree with a2 = c_1 and a1 = c_3 \
+                         (got a2 = {}, c_1 = {c1}, a1 = {}, c_3 = {c3})",
+                        self.a2, self.a1
+                    ),
+                });
+            }
+        }
         self.model()?;
         Ok(())
     }
@@ -524,14 +559,23 @@ impl ModelFile {
         Ok(())
     }
 
+    /// The input polynomial `g` of this file: `input_polynomial` when present, else the paper's
+    /// cubic `a1 x^3 + a2 x`.
+    pub fn input_function(&self) -> Result<InputPolynomial<f64>, CoreError> {
+        match &self.input_polynomial {
+            Some(c) => InputPolynomial::new(c),
+            None => InputPolynomial::cubic(self.a1, self.a2),
+        }
+    }
+
+    /// The MPIM of this file, with zero memory, as the core accepts or refuses it.
+    pub fn core_model(&self) -> Result<Mpim<f64, Vec<f64>>, CoreError> {
+        Mpim::with_input_polynomial(&self.thresholds, &self.weights, self.input_function()?)
+    }
+
     /// The MPIM of this file, with zero memory.
     pub fn model(&self) -> Result<Mpim<f64, Vec<f64>>, ModelFileError> {
-        Ok(Mpim::new(
-            &self.thresholds,
-            &self.weights,
-            self.a1,
-            self.a2,
-        )?)
+        Ok(self.core_model()?)
     }
 
     /// Reads and validates a model file.

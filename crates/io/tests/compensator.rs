@@ -2,7 +2,8 @@
 
 use std::path::PathBuf;
 
-use hystcomp_io::compensator::{CompensatorError, Method, ScaledCompensator};
+use hystcomp_core::CoreError;
+use hystcomp_io::compensator::{CompensatorError, Method, ScaledCompensator, UnstableDelay};
 use hystcomp_io::model_file::ModelFile;
 use proptest::prelude::*;
 use proptest::test_runner::{Config, RngSeed};
@@ -101,7 +102,9 @@ proptest! {
         let limits = (lo, lo + width);
         for method in Method::ALL {
             let file = if method == Method::Dihc { &inverse } else { &plant };
-            let mut c = ScaledCompensator::new(file, method, Some(limits)).unwrap();
+            // Table 1's delayed WIHC can ring: allowed explicitly, its drive must stay within
+            // the limits too.
+            let mut c = ScaledCompensator::with_unstable_delay(file, method, Some(limits), UnstableDelay::Allow).unwrap();
             for &d in &desired {
                 let v = c.step(d);
                 prop_assert!(v >= limits.0 && v <= limits.1, "{} gave {} for {}", method, v, d);
@@ -111,47 +114,78 @@ proptest! {
 }
 
 #[test]
-fn wihc_reports_its_delayed_loop_gain_and_dihc_its_desired_range() {
+fn plant_methods_report_their_delayed_loop_gain_and_dihc_its_desired_range() {
     let plant = example("table1-plant.json");
     let inverse = example("table2-inverse.json");
     // Table 1 over 0..10 V: all ten operators moving near 0 V, (b_1 + ... + b_10) / a2.
-    let expected = plant.weights.iter().sum::<f64>() / plant.a2;
-    for method in [Method::Wihc, Method::WihcDelayed] {
+    let wihc_gain = plant.weights.iter().sum::<f64>() / plant.a2;
+    // IHC: |3 a1 x^2| / (a2 + b_1) at x = 1.
+    let ihc_gain = 3.0 * plant.a1.abs() / (plant.a2 + plant.weights[0]);
+    for (method, expected) in [
+        (Method::Wihc, wihc_gain),
+        (Method::WihcGuarded, wihc_gain),
+        (Method::Ihc, ihc_gain),
+        (Method::IhcDelayed, ihc_gain),
+        (Method::IhcGuarded, ihc_gain),
+    ] {
         let c = ScaledCompensator::new(&plant, method, None).unwrap();
         let gain = c.delayed_loop_gain().unwrap();
         assert!((gain - expected).abs() < 1e-12, "{method}: {gain}");
-        assert!(gain > 1.0);
         assert_eq!(c.desired_range(), None);
-    }
-    for method in [Method::Ihc, Method::IhcDelayed] {
-        assert_eq!(
-            ScaledCompensator::new(&plant, method, None)
-                .unwrap()
-                .delayed_loop_gain(),
-            None
+        let relaxation = c.guard_relaxation().unwrap();
+        assert!(
+            relaxation > 0.0 && relaxation <= 1.0,
+            "{method}: {relaxation}"
         );
     }
+    // The plain delayed WIHC (gain 1.66) is refused unless allowed.
+    let err = ScaledCompensator::new(&plant, Method::WihcDelayed, None).unwrap_err();
+    assert!(
+        matches!(
+            err,
+            CompensatorError::Core(CoreError::DelayedLoopUnstable { .. })
+        ),
+        "{err:?}"
+    );
+    let allowed = ScaledCompensator::with_unstable_delay(
+        &plant,
+        Method::WihcDelayed,
+        None,
+        UnstableDelay::Allow,
+    )
+    .unwrap();
+    assert!((allowed.delayed_loop_gain().unwrap() - wihc_gain).abs() < 1e-12);
     let dihc = ScaledCompensator::new(&inverse, Method::Dihc, None).unwrap();
     let lo = inverse.input.to_physical(inverse.input_range[0]);
     let hi = inverse.input.to_physical(inverse.input_range[1]);
     assert_eq!(dihc.desired_range(), Some((lo.min(hi), lo.max(hi))));
     assert_eq!(dihc.delayed_loop_gain(), None);
+    assert_eq!(dihc.guard_relaxation(), None);
 }
 
 #[test]
 fn delayed_wihc_ringing_on_table1_is_a_loop_saturation_not_an_unreachable_position() {
     let plant = example("table1-plant.json");
-    let mut delayed = ScaledCompensator::new(&plant, Method::WihcDelayed, None).unwrap();
+    let mut delayed = ScaledCompensator::with_unstable_delay(
+        &plant,
+        Method::WihcDelayed,
+        None,
+        UnstableDelay::Allow,
+    )
+    .unwrap();
     let mut exact = ScaledCompensator::new(&plant, Method::Wihc, None).unwrap();
+    let mut guarded = ScaledCompensator::new(&plant, Method::WihcGuarded, None).unwrap();
     // 35 + 20 sin(2 pi t) um from rest at 10 kHz: reachable all along (the exact WIHC says so).
     for k in 0..10_000 {
         let y = 35.0 + 20.0 * (2.0 * std::f64::consts::PI * k as f64 * 1e-4).sin();
-        for c in [&mut delayed, &mut exact] {
+        for c in [&mut delayed, &mut exact, &mut guarded] {
             let v = c.step(y);
             assert!((0.0..=10.0).contains(&v));
         }
     }
     assert_eq!(exact.diagnostics(), Default::default());
+    // The guarded loop does not ring.
+    assert_eq!(guarded.diagnostics(), Default::default());
     let d = delayed.diagnostics();
     assert_eq!(d.saturated, 0, "{d:?}");
     assert!(d.loop_saturated > 10, "{d:?}");

@@ -73,6 +73,45 @@ fn a_saved_file_loads_back_identically_and_atomically() {
     assert!((back.output_to_physical(0.5) - 5.0).abs() < 1e-15);
 }
 
+/// A format-1 file (the shipped tables) loads; a higher-degree model is written as format 2 with
+/// its whole polynomial and loads back to the same model; a cubic one has no polynomial field.
+#[test]
+fn higher_degree_input_polynomials_round_trip_in_format_2() {
+    use hystcomp_core::{InputPolynomial, Mpim};
+    let t1 = ModelFile::load(&example("table1-plant.json")).unwrap();
+    assert_eq!(t1.format_version, 1);
+    assert_eq!(t1.input_polynomial, None);
+    let cubic = ModelFile::from_model(
+        Direction::Plant,
+        volts(),
+        microns(),
+        [0.0, 1.0],
+        &t1.model().unwrap(),
+    )
+    .unwrap();
+    assert_eq!(cubic.format_version, 2);
+    assert!(!cubic.to_json().contains("input_polynomial"));
+    let c = [0.46, 0.05, -0.1569, 0.02, -0.01, 0.003, 0.001];
+    let model: Mpim<f64, Vec<f64>> = Mpim::with_input_polynomial(
+        &t1.thresholds,
+        &t1.weights,
+        InputPolynomial::new(&c).unwrap(),
+    )
+    .unwrap();
+    let file =
+        ModelFile::from_model(Direction::Plant, volts(), microns(), [0.0, 1.0], &model).unwrap();
+    assert_eq!(file.input_polynomial.as_deref(), Some(&c[..]));
+    assert_eq!((file.a1, file.a2), (-0.1569, 0.46));
+    let back = ModelFile::from_json(&file.to_json()).unwrap();
+    assert_eq!(back, file);
+    let mut a = back.model().unwrap();
+    let mut b = model.clone();
+    for k in 0..200 {
+        let x = 0.5 + 0.45 * (k as f64 * 0.07).sin();
+        assert_eq!(a.step(x), b.step(x));
+    }
+}
+
 fn refusal(edit: impl Fn(&mut serde_json::Value)) -> String {
     let text = std::fs::read_to_string(example("table1-plant.json")).unwrap();
     let mut value: serde_json::Value = serde_json::from_str(&text).unwrap();
@@ -85,6 +124,26 @@ fn refusal(edit: impl Fn(&mut serde_json::Value)) -> String {
 #[test]
 fn each_bad_file_is_refused_with_a_message_naming_the_problem() {
     assert!(refusal(|v| v["format_version"] = 3.into()).contains("format_version 3"));
+    // The input polynomial: format 2 only, agreeing with a1 and a2, at most degree 9.
+    let table1_polynomial = serde_json::json!([0.4603, 0.0, -0.1569, 0.01]);
+    assert!(
+        refusal(|v| v["input_polynomial"] = table1_polynomial.clone())
+            .contains("input_polynomial needs format_version 2")
+    );
+    assert!(
+        refusal(|v| {
+            v["format_version"] = 2.into();
+            v["input_polynomial"] = serde_json::json!([0.5, 0.0, -0.1569]);
+        })
+        .contains("must agree with a2 = c_1")
+    );
+    assert!(
+        refusal(|v| {
+            v["format_version"] = 2.into();
+            v["input_polynomial"] = serde_json::json!([0.4603, 0.0, -0.1569, 0, 0, 0, 0, 0, 0, 1]);
+        })
+        .contains("between 1 and 9")
+    );
     assert!(
         refusal(|v| {
             v.as_object_mut().unwrap().remove("format_version");

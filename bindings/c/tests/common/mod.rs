@@ -15,6 +15,7 @@ pub const INVALID_MODEL_FILE: c_int = HystcompStatus::InvalidModelFile as c_int;
 pub const WRONG_DIRECTION: c_int = HystcompStatus::WrongDirection as c_int;
 pub const NON_FINITE_INPUT: c_int = HystcompStatus::NonFiniteInput as c_int;
 pub const IDENTIFICATION_FAILED: c_int = HystcompStatus::IdentificationFailed as c_int;
+pub const UNSTABLE_DELAY: c_int = HystcompStatus::UnstableDelay as c_int;
 
 /// The message of the last failed call on this thread.
 pub fn last_error() -> String {

@@ -36,6 +36,7 @@ from ._errors import (
     ModelFileError,
     NotInvertibleError,
     StageConfigError,
+    UnstableDelayError,
     WrongDirectionError,
 )
 from ._plot import plot_response
@@ -106,6 +107,7 @@ __all__ = [
     "StageResponse",
     "StudyResult",
     "TrackingIndices",
+    "UnstableDelayError",
     "Wihc",
     "WrongDirectionError",
     "__version__",
@@ -119,28 +121,57 @@ __all__ = [
 ]
 
 
+def _family_method(family: str, delayed: bool, guarded: bool) -> str:
+    if guarded:
+        return family + "-guarded"
+    return family + "-delayed" if delayed else family
+
+
 class Ihc(Compensator):
     """Inverse hysteresis compensation (section 3.1, eqs. (5)-(8)) from a plant model:
-    ``Compensator(model, "ihc" or "ihc-delayed", limits)``.
+    ``Compensator(model, "ihc", "ihc-delayed" or "ihc-guarded", limits)``.
 
     With ``delayed=True`` the cubic term uses the previous output ``v(t - Ts)``, as real-time
-    implementations do; by default the implicit equation is solved exactly each sample.
+    implementations do (refused with ``UnstableDelayError`` when that loop can oscillate on the
+    model, unless ``allow_unstable_delay=True``); with ``guarded=True`` the delayed loop is
+    under-relaxed so that it never oscillates; by default the implicit equation is solved
+    exactly each sample.
     """
 
-    def __new__(cls, model, limits: Optional[Sequence[float]] = None, *, delayed: bool = False):
-        return super().__new__(cls, model, "ihc-delayed" if delayed else "ihc", limits)
+    def __new__(
+        cls,
+        model,
+        limits: Optional[Sequence[float]] = None,
+        *,
+        delayed: bool = False,
+        guarded: bool = False,
+        allow_unstable_delay: bool = False,
+    ):
+        method = _family_method("ihc", delayed, guarded)
+        return super().__new__(cls, model, method, limits, allow_unstable_delay=allow_unstable_delay)
 
 
 class Wihc(Compensator):
     """Compensation without inverse (section 3.2, eq. (9)) from a plant model:
-    ``Compensator(model, "wihc" or "wihc-delayed", limits)``.
+    ``Compensator(model, "wihc", "wihc-delayed" or "wihc-guarded", limits)``.
 
-    With ``delayed=True`` the loop is broken with ``H[v](t - Ts)``; by default the implicit
-    equation is solved exactly each sample.
+    With ``delayed=True`` the loop is broken with ``H[v](t - Ts)`` (refused with
+    ``UnstableDelayError`` when that loop can oscillate on the model, unless
+    ``allow_unstable_delay=True``); with ``guarded=True`` the delayed loop is under-relaxed so
+    that it never oscillates; by default the implicit equation is solved exactly each sample.
     """
 
-    def __new__(cls, model, limits: Optional[Sequence[float]] = None, *, delayed: bool = False):
-        return super().__new__(cls, model, "wihc-delayed" if delayed else "wihc", limits)
+    def __new__(
+        cls,
+        model,
+        limits: Optional[Sequence[float]] = None,
+        *,
+        delayed: bool = False,
+        guarded: bool = False,
+        allow_unstable_delay: bool = False,
+    ):
+        method = _family_method("wihc", delayed, guarded)
+        return super().__new__(cls, model, method, limits, allow_unstable_delay=allow_unstable_delay)
 
 
 class Dihc(Compensator):

@@ -6,6 +6,7 @@ __all__ = [
     "HystcompError",
     "InvalidValueError",
     "NotInvertibleError",
+    "UnstableDelayError",
     "WrongDirectionError",
     "ModelFileError",
     "IdentificationError",
@@ -24,8 +25,14 @@ class InvalidValueError(HystcompError, ValueError):
 
 class NotInvertibleError(InvalidValueError):
     """The model cannot be inverted (or used by the method) over the range asked for: a branch
-    slope is not positive, the PI part has no eq. (7) inverse, ``a2 <= 0`` for WIHC, or the
-    delayed WIHC would diverge."""
+    slope is not positive, the PI part has no eq. (7) inverse, or ``a2 <= 0`` for WIHC."""
+
+
+class UnstableDelayError(NotInvertibleError):
+    """A plain one-sample-delayed method (``"ihc-delayed"``, ``"wihc-delayed"``) was asked for
+    on a model whose delayed loop gain over the limits is 1 or more, so the loop can ring
+    between the limits. Use the exact method, the guarded one (``"ihc-guarded"``,
+    ``"wihc-guarded"``), or pass ``allow_unstable_delay=True``."""
 
 
 class WrongDirectionError(InvalidValueError):
@@ -51,6 +58,7 @@ for _cls in (
     HystcompError,
     InvalidValueError,
     NotInvertibleError,
+    UnstableDelayError,
     WrongDirectionError,
     ModelFileError,
     IdentificationError,

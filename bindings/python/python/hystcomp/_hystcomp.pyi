@@ -204,14 +204,24 @@ class Compensator:
         model: Union[ModelFile, PathLike],
         method: str = "ihc",
         limits: Optional[Sequence[float]] = None,
+        *,
+        allow_unstable_delay: bool = False,
     ) -> None:
-        """``method``: ``"ihc"``, ``"ihc-delayed"``, ``"wihc"``, ``"wihc-delayed"`` (plant
-        models) or ``"dihc"`` (inverse models); ``limits``: ``(min, max)`` drive limits, by
-        default the range the model was identified on. Every output stays within them, never
-        NaN. Raises WrongDirectionError, NotInvertibleError, InvalidValueError, ModelFileError
-        or an OSError for the file."""
+        """``method``: ``"ihc"``, ``"ihc-delayed"``, ``"ihc-guarded"``, ``"wihc"``,
+        ``"wihc-delayed"``, ``"wihc-guarded"`` (plant models) or ``"dihc"`` (inverse models);
+        ``limits``: ``(min, max)`` drive limits, by default the range the model was identified
+        on. Every output stays within them, never NaN. A plain delayed method whose loop gain
+        is 1 or more raises UnstableDelayError unless ``allow_unstable_delay=True``. Raises
+        WrongDirectionError, NotInvertibleError, InvalidValueError, ModelFileError or an
+        OSError for the file."""
     @staticmethod
-    def from_mpim(model: Mpim, method: str = "ihc", limits: Sequence[float] = (0.0, 1.0)) -> Compensator:
+    def from_mpim(
+        model: Mpim,
+        method: str = "ihc",
+        limits: Sequence[float] = (0.0, 1.0),
+        *,
+        allow_unstable_delay: bool = False,
+    ) -> Compensator:
         """A compensator from a model in normalised units (desired position and control both
         normalised, eq. (11)): a plant model for IHC and WIHC, an inverse model (valid for
         desired positions in ``[0, 1]``) for DIHC."""
@@ -227,7 +237,8 @@ class Compensator:
         """``(min, max)`` drive limits, in ``control_unit``."""
     @property
     def method(self) -> str:
-        """The method: ``"ihc"``, ``"ihc-delayed"``, ``"wihc"``, ``"wihc-delayed"`` or ``"dihc"``."""
+        """The method: ``"ihc"``, ``"ihc-delayed"``, ``"ihc-guarded"``, ``"wihc"``,
+        ``"wihc-delayed"``, ``"wihc-guarded"`` or ``"dihc"``."""
     @property
     def desired_unit(self) -> str:
         """Unit of the desired position (the input), e.g. ``"um"``."""
@@ -245,10 +256,14 @@ class Compensator:
         so this stays 0 here)."""
     @property
     def delayed_loop_gain(self) -> Optional[float]:
-        """For ``"wihc"`` and ``"wihc-delayed"``: the worst-case loop gain of the delayed WIHC over
-        the limits, ``max |3 a1 x^2 + b_1 + ... + b_k| / a2`` (eq. (9) with ``H[v](t - Ts)``). At
-        or above 1 the delayed loop can ring between the limits after a jump in the desired
-        position; prefer ``"wihc"`` then. ``None`` for the other methods. Table 1: 1.66."""
+        """IHC and WIHC methods: the worst-case gain of the family's delayed loop over the
+        limits (IHC ``max |3 a1 x^2| / (a2 + b_1 + ... + b_k)``, Table 1: 0.68; WIHC
+        ``max |3 a1 x^2 + b_1 + ... + b_k| / a2``, Table 1: 1.66); at or above 1 the plain
+        delayed loop can ring after a jump and is refused unless allowed. ``None`` for DIHC."""
+    @property
+    def guard_relaxation(self) -> Optional[float]:
+        """IHC and WIHC methods: the under-relaxation of the guarded delayed loop, in
+        ``(0, 1]``. ``None`` for DIHC."""
 
 class Identification:
     """An identified model: ``.model`` (a ``ModelFile``, physical scales and normalised

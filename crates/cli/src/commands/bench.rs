@@ -56,11 +56,12 @@ const CHAIN_PREVIEW: usize = 8;
 struct Figure {
     /// `mpim-forward` (a whole signal: consecutive samples overlap in the processor),
     /// `mpim-chained` (each input waits for the previous output, as in a control loop),
-    /// `ihc`, `ihc-delayed`, `wihc`, `wihc-delayed` or `dihc`; for the built-in models also
-    /// the chain's links (`creep-inverse`, `vibration-inverse`, each alone, per sample) and
-    /// `chain-ihc` (vibration inverse with a preview of 8 samples, creep inverse and exact IHC:
-    /// the links of `hystcomp_core::reference`); for a model file with creep or vibration
-    /// parts, `chain-ihc` with its own links (the preview an offline inversion needs).
+    /// `ihc`, `ihc-delayed`, `ihc-guarded`, `wihc`, `wihc-delayed`, `wihc-guarded` or `dihc`;
+    /// for the built-in models also the chain's links (`creep-inverse`, `vibration-inverse`,
+    /// each alone, per sample) and `chain-ihc` (vibration inverse with a preview of 8 samples,
+    /// creep inverse and exact IHC: the links of `hystcomp_core::reference`); for a model file
+    /// with creep or vibration parts, `chain-ihc` with its own links (the preview an offline
+    /// inversion needs).
     what: &'static str,
     /// Where the model came from: `table1` / `table2` spread over `operators`, or the file.
     model: String,
@@ -177,14 +178,22 @@ impl Bench {
             black_box(&out);
         });
         let limits = OutputLimits::new(T::zero(), T::one())?;
-        let compensators: [(&'static str, Box<dyn Compensator<T>>); 4] = [
+        // The plain delayed loops are timed even where their loop gain is 1 or more (Table 1's
+        // WIHC: 1.66): the trajectory rises from rest, so they track without ringing.
+        let unchecked = SolveMode::DelayedAllowUnstable;
+        let guarded = SolveMode::DelayedGuarded;
+        let compensators: [(&'static str, Box<dyn Compensator<T>>); 6] = [
             (
                 "ihc",
                 Box::new(Ihc::<T, Vec<T>>::new(plant, limits, SolveMode::Exact)?),
             ),
             (
                 "ihc-delayed",
-                Box::new(Ihc::<T, Vec<T>>::new(plant, limits, SolveMode::Delayed)?),
+                Box::new(Ihc::<T, Vec<T>>::new(plant, limits, unchecked)?),
+            ),
+            (
+                "ihc-guarded",
+                Box::new(Ihc::<T, Vec<T>>::new(plant, limits, guarded)?),
             ),
             (
                 "wihc",
@@ -192,7 +201,11 @@ impl Bench {
             ),
             (
                 "wihc-delayed",
-                Box::new(Wihc::<T, Vec<T>>::new(plant, limits, SolveMode::Delayed)?),
+                Box::new(Wihc::<T, Vec<T>>::new(plant, limits, unchecked)?),
+            ),
+            (
+                "wihc-guarded",
+                Box::new(Wihc::<T, Vec<T>>::new(plant, limits, guarded)?),
             ),
         ];
         for (what, mut c) in compensators {

@@ -2,7 +2,8 @@
 
 use std::path::PathBuf;
 
-use hystcomp_io::compensator::{Method, ScaledCompensator};
+use hystcomp_core::CoreError;
+use hystcomp_io::compensator::{CompensatorError, Method, ScaledCompensator, UnstableDelay};
 use hystcomp_io::data::{self, Column, Delimiter, Header, ReadOptions};
 use hystcomp_io::model_file::ModelFile;
 use serde::Serialize;
@@ -17,7 +18,9 @@ pub struct Args {
     /// Model file (JSON): a plant model for ihc / wihc, an inverse model for dihc.
     #[arg(long, value_name = "FILE")]
     model: PathBuf,
-    /// Compensator: ihc, ihc-delayed, wihc, wihc-delayed or dihc.
+    /// Compensator: ihc, wihc (exact solves), ihc-delayed, wihc-delayed (one-sample-delayed
+    /// loops, refused on a model where they can oscillate), ihc-guarded, wihc-guarded (delayed
+    /// loops with a guard: they never oscillate) or dihc (inverse model).
     #[arg(long, value_name = "METHOD", value_parser = parse_method)]
     method: Method,
     /// Desired trajectory: a CSV (or tab / whitespace separated, or .mat) file with a time
@@ -58,6 +61,11 @@ pub struct Args {
     /// counted either way, and the drive file is written).
     #[arg(long)]
     allow_saturation: bool,
+    /// Run ihc-delayed or wihc-delayed even when its loop gain on this model is 1 or more, so
+    /// that it can ring between the drive limits after a jump in the desired position (it is
+    /// refused otherwise; ihc-guarded and wihc-guarded never oscillate).
+    #[arg(long)]
+    allow_unstable_delay: bool,
 }
 
 impl NamesFiles for Args {
@@ -115,9 +123,15 @@ struct Report {
     first_unreachable_time_s: Option<f64>,
     /// Time (s) of the first loop saturation.
     first_loop_saturated_time_s: Option<f64>,
-    /// wihc and wihc-delayed: the worst-case loop gain of the delayed WIHC over the limits
-    /// (at or above 1 the delayed loop can ring after a jump).
+    /// IHC and WIHC methods: the worst-case gain of the family's one-sample-delayed loop over
+    /// the limits (at or above 1 the plain delayed loop can ring after a jump, and is refused
+    /// without --allow-unstable-delay).
     delayed_loop_gain: Option<f64>,
+    /// IHC and WIHC methods: the under-relaxation of the family's guarded delayed loop, in
+    /// (0, 1] (1: the guarded loop is the plain one).
+    guard_relaxation: Option<f64>,
+    /// Whether --allow-unstable-delay was given.
+    allow_unstable_delay: bool,
     /// DIHC: the desired positions the inverse model accepts (it clamps into this range).
     desired_range: Option<(f64, f64)>,
     /// Smallest and largest drive emitted.
@@ -139,9 +153,19 @@ pub fn run(args: &Args, ctx: Context) -> Result<(), CliError> {
             "samples",
         )?;
     }
-    let mut compensator =
-        ScaledCompensator::with_preview(&model, args.method, args.limits, args.preview)
-            .map_err(|e| CliError::input(e.to_string()).context(args.model.display()))?;
+    let unstable = if args.allow_unstable_delay {
+        UnstableDelay::Allow
+    } else {
+        UnstableDelay::Refuse
+    };
+    let mut compensator = ScaledCompensator::with_options(
+        &model,
+        args.method,
+        args.limits,
+        args.preview,
+        unstable,
+    )
+    .map_err(|e| build_error(e, args.method).context(args.model.display()))?;
     let stage = match &args.stage {
         Some(path) => hystcomp_stage::StageConfig::from_toml_file(path)
             .map_err(|e| CliError::input(e.to_string()).context(path.display()))?,
@@ -162,14 +186,17 @@ pub fn run(args: &Args, ctx: Context) -> Result<(), CliError> {
         .map_err(|e| CliError::from(e).context(args.trajectory.display()))?;
     check_rate(&model, time).map_err(|e| e.context(args.trajectory.display()))?;
 
-    if args.method == Method::WihcDelayed
+    if args.method.is_plain_delayed()
         && let Some(gain) = compensator.delayed_loop_gain().filter(|g| *g >= 1.0)
     {
         errln!(
-            "hystcomp: warning: the delayed WIHC's loop gain on this model is {gain:.3} (>= 1: \
-             max |3 a1 x^2 + b_1 + ... + b_k| / a2 over the drive limits), so after a jump in the \
-             desired position its drive can ring between the limits; --method wihc solves \
-             eq. (9) exactly and does not"
+            "hystcomp: warning: --allow-unstable-delay: the {} loop gain on this model is \
+             {gain:.3} (>= 1 over the drive limits), so after a jump in the desired position its \
+             drive can ring between the limits; --method {} solves the law exactly and --method \
+             {} never oscillates",
+            args.method,
+            args.method.exact(),
+            args.method.guarded().unwrap_or(args.method.exact()),
         );
     }
 
@@ -247,6 +274,8 @@ pub fn run(args: &Args, ctx: Context) -> Result<(), CliError> {
         first_unreachable_time_s: first_unreachable,
         first_loop_saturated_time_s: first_loop,
         delayed_loop_gain: compensator.delayed_loop_gain(),
+        guard_relaxation: compensator.guard_relaxation(),
+        allow_unstable_delay: args.allow_unstable_delay,
         desired_range: compensator.desired_range(),
         control_range: control
             .iter()
@@ -391,12 +420,27 @@ fn unreachable_message(report: &Report, desired: &[f64]) -> String {
     }
 }
 
+/// A compensator that could not be built, for the user: a delayed loop that can oscillate
+/// names the flag that overrides the refusal and the methods that do not oscillate.
+fn build_error(error: CompensatorError, method: Method) -> CliError {
+    let mut message = error.to_string();
+    if matches!(
+        error,
+        CompensatorError::Core(CoreError::DelayedLoopUnstable { .. })
+    ) {
+        message = format!(
+            "{message}: --method {} (exact) or --method {} (guarded delayed loop) never \
+             oscillate; --allow-unstable-delay runs it anyway",
+            method.exact(),
+            method.guarded().unwrap_or(method.exact()),
+        );
+    }
+    CliError::input(message)
+}
+
 /// The message for a delayed loop that hit the limits although the positions were reachable.
 fn loop_message(report: &Report) -> String {
-    let exact = match report.method {
-        Method::IhcDelayed => "ihc",
-        _ => "wihc",
-    };
+    let exact = report.method.exact().name();
     let gain = match report.delayed_loop_gain {
         Some(g) if g >= 1.0 => format!(" (its loop gain on this model is {g:.3} >= 1)"),
         Some(g) => format!(" (its loop gain on this model is {g:.3})"),

@@ -4,6 +4,7 @@
 use std::path::PathBuf;
 
 use hystcomp_identify::{CrossvalOptions, IdentifyError, Record, Warmup, crossval};
+use hystcomp_io::compensator::UnstableDelay;
 use hystcomp_io::data::{Column, RowRange};
 use hystcomp_io::model_file::Direction;
 use serde::Serialize;
@@ -63,6 +64,10 @@ pub struct Args {
     /// Also write the inverse model (for DIHC) to this file.
     #[arg(long, value_name = "MODEL.json")]
     pub save_inverse: Option<PathBuf>,
+    /// Replay ihc-delayed and wihc-delayed even when their loop gain on the plant model is 1
+    /// or more (they can then ring; by default they are reported as not built, with the gain).
+    #[arg(long)]
+    pub allow_unstable_delay: bool,
 }
 
 impl NamesFiles for Args {
@@ -137,6 +142,11 @@ pub fn run(args: &Args, ctx: Context) -> Result<(), CliError> {
     let options = CrossvalOptions {
         identify,
         test_warmup,
+        unstable_delay: if args.allow_unstable_delay {
+            UnstableDelay::Allow
+        } else {
+            UnstableDelay::Refuse
+        },
     };
     let mut bar = if args.fit.iterates() {
         Bar::new("plant model", args.fit.iterations as u64)
@@ -236,6 +246,20 @@ pub fn run(args: &Args, ctx: Context) -> Result<(), CliError> {
         f.std_percent,
         unit = c.displacement_unit
     )?;
+    if let Some(g) = &t.delayed_loop_gains {
+        outln!(
+            "  delayed loop gains of the plant model over the limits: ihc-delayed {:.4}, \
+             wihc-delayed {:.4} (below 1: they settle after a jump; at or above 1 they can \
+             ring{})",
+            g.ihc,
+            g.wihc,
+            if args.allow_unstable_delay {
+                ", replayed anyway (--allow-unstable-delay)"
+            } else {
+                " and are not replayed without --allow-unstable-delay"
+            }
+        )?;
+    }
     if t.voltage_outside_model_range > 0 || t.displacement_outside_model_range > 0 {
         outln!(
             "  outside the training ranges: {} voltage and {} displacement samples",

@@ -589,7 +589,25 @@ pub fn print_fit(report: &hystcomp_identify::FitReport) -> Result<(), CliError> 
         report.min_branch_slope,
         report.margin,
         report.elapsed_s * 1e3
-    )
+    )?;
+    if let Some(g) = &report.delayed_loop_gains {
+        let verdict = |gain: f64| {
+            if gain < 1.0 {
+                "settles"
+            } else {
+                "can ring: refused by compensate without --allow-unstable-delay"
+            }
+        };
+        outln!(
+            "  delayed loops over the fitted voltage range: ihc-delayed gain {:.4} ({}), \
+             wihc-delayed gain {:.4} ({})",
+            g.ihc,
+            verdict(g.ihc),
+            g.wihc,
+            verdict(g.wihc)
+        )?;
+    }
+    Ok(())
 }
 
 /// A library error of a fit on `loaded` (read from `path`) for the user: the file's name, and

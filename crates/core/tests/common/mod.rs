@@ -70,6 +70,31 @@ pub fn random_model(rng: &mut impl Rng, n: usize) -> VecMpim {
     Mpim::new(&thresholds, &weights, a1, a2).unwrap()
 }
 
+/// A random model with `n` operators whose weights scale with `1 / n` (both signs), so that
+/// models of 100 operators are as varied as models of 10: thresholds as [`random_model`],
+/// weights `(4 u - 0.75 u') / n`.
+pub fn random_scaled_model(rng: &mut impl Rng, n: usize) -> VecMpim {
+    let m = random_model(rng, n);
+    let weights: Vec<f64> = (0..n)
+        .map(|_| (4.0 * rng.random::<f64>() - 0.75 * rng.random::<f64>()) / n.max(1) as f64)
+        .collect();
+    Mpim::new(m.thresholds(), &weights, m.a1(), m.a2()).unwrap()
+}
+
+/// A random model of [`random_scaled_model`] that is invertible on [0, 1] with a smallest
+/// slope of at least 0.02 and whose PI part has an inverse (eq. (7)); any `n` up to hundreds.
+pub fn random_invertible_scaled_model(rng: &mut impl Rng, n: usize) -> VecMpim {
+    loop {
+        let m = random_scaled_model(rng, n);
+        if m.check_invertible(0.0, 1.0).is_ok()
+            && m.min_branch_slope(0.0, 1.0).unwrap().slope > 0.02
+            && m.pi_part_inverse().is_ok()
+        {
+            return m;
+        }
+    }
+}
+
 /// A random model that is invertible on [0, 1] and whose PI part has an inverse (eq. (7)).
 pub fn random_invertible_model(rng: &mut impl Rng, n: usize) -> VecMpim {
     loop {
@@ -202,4 +227,130 @@ pub fn grid_delayed_loop_gain(model: &VecMpim, lo: f64, hi: f64) -> f64 {
         }
     }
     worst
+}
+
+/// `g'(x) = sum_j j c_j x^(j - 1)` from the coefficients `[c_1, ..., c_D]`, term by term.
+pub fn plain_slope(coefficients: &[f64], x: f64) -> f64 {
+    coefficients
+        .iter()
+        .enumerate()
+        .map(|(i, c)| (i + 1) as f64 * c * x.powi(i as i32))
+        .sum()
+}
+
+/// `g(x) = sum_j c_j x^j`, term by term.
+pub fn plain_value(coefficients: &[f64], x: f64) -> f64 {
+    coefficients
+        .iter()
+        .enumerate()
+        .map(|(i, c)| c * x.powi(i as i32 + 1))
+        .sum()
+}
+
+/// The reachable `(k, x)` of a dense grid (4001 points plus the ends and the operators' edges):
+/// operator `k` moves at `x` only after the input travelled `r_k` from a reversal, so
+/// `x >= lo + r_k` or `x <= max(hi - r_k, 0)`, within `[min(lo, 0), max(hi, 0)]`. Calls
+/// `visit(k, x, b_1 + ... + b_k)`.
+pub fn grid_reachable(model: &VecMpim, lo: f64, hi: f64, mut visit: impl FnMut(usize, f64, f64)) {
+    let (lo, hi) = (lo.min(0.0), hi.max(0.0));
+    let (r, b) = (model.thresholds(), model.weights());
+    let always = r.iter().take_while(|r| **r <= 0.0).count();
+    for k in always..=r.len() {
+        let rk = if k == 0 { 0.0 } else { r[k - 1] };
+        let prefix: f64 = b[..k].iter().sum();
+        let mut xs: Vec<f64> = (0..=4000)
+            .map(|i| lo + (hi - lo) * i as f64 / 4000.0)
+            .collect();
+        xs.extend([lo, hi, lo + rk, (hi - rk).max(0.0), 0.0]);
+        for x in xs {
+            if x >= lo && x <= hi && (x >= lo + rk || x <= (hi - rk).max(0.0)) {
+                visit(k, x, prefix);
+            }
+        }
+    }
+}
+
+/// The delayed loops' largest gains over the grid of [`grid_reachable`]: IHC
+/// `|g'(x) - a2| / (a2 + b_1 + ... + b_k)` and WIHC `|g'(x) - a2 + b_1 + ... + b_k| / a2`, with
+/// `g'` evaluated term by term.
+pub fn grid_loop_gains(model: &VecMpim, lo: f64, hi: f64) -> (f64, f64) {
+    let c = model.input_polynomial().coefficients().to_vec();
+    let a2 = model.a2();
+    let (mut ihc, mut wihc) = (0.0f64, 0.0f64);
+    grid_reachable(model, lo, hi, |_, x, prefix| {
+        let h = plain_slope(&c, x) - a2;
+        ihc = ihc.max(h.abs() / (a2 + prefix));
+        wihc = wihc.max((h + prefix).abs() / a2);
+    });
+    (ihc, wihc)
+}
+
+/// The smallest branch slope `g'(x) + b_1 + ... + b_k` over the grid of [`grid_reachable`].
+pub fn grid_min_slope(model: &VecMpim, lo: f64, hi: f64) -> f64 {
+    let c = model.input_polynomial().coefficients().to_vec();
+    let mut worst = f64::INFINITY;
+    grid_reachable(model, lo, hi, |_, x, prefix| {
+        worst = worst.min(plain_slope(&c, x) + prefix);
+    });
+    worst
+}
+
+/// A random model with `n` operators and an input polynomial of `degree` (1 to 9) with
+/// coefficients of both signs (the extremes of `g'` then often lie inside the range);
+/// invertible on [0, 1] with a smallest slope of at least 0.02 and an invertible PI part. It
+/// starts from a random invertible cubic model and adds the other powers, halving them until
+/// the model is invertible (so it always ends).
+pub fn random_polynomial_model(rng: &mut impl Rng, n: usize, degree: usize) -> VecMpim {
+    let base = random_invertible_scaled_model(rng, n);
+    let extra: Vec<f64> = (0..degree)
+        .map(|j| (rng.random::<f64>() * 2.0 - 1.0) * 1.5 / (j + 1) as f64)
+        .collect();
+    let mut amplitude = 1.0;
+    loop {
+        let mut c: Vec<f64> = vec![0.0; degree];
+        for (j, cj) in c.iter_mut().enumerate() {
+            *cj = match j {
+                0 => base.a2(),
+                2 => base.a1() + amplitude * extra[2],
+                _ => amplitude * extra[j],
+            };
+        }
+        if degree < 3 {
+            // No cubic term: the base's a1 is dropped; keep the slope positive with a2.
+            c[0] = base.a2() + 3.0 * base.a1().abs();
+        }
+        let input = hystcomp_core::InputPolynomial::new(&c).unwrap();
+        let model = Mpim::with_input_polynomial(base.thresholds(), base.weights(), input).unwrap();
+        if model.check_invertible(0.0, 1.0).is_ok()
+            && model.min_branch_slope(0.0, 1.0).unwrap().slope > 0.02
+            && model.pi_part_inverse().is_ok()
+        {
+            return model;
+        }
+        amplitude *= 0.5;
+        if amplitude < 1e-6 {
+            return base;
+        }
+    }
+}
+
+/// The plain bisection inverse of a model whose branch is given by `branch` (the model's
+/// output for input `v` from a fixed state), over `[lo, hi]`.
+pub fn bisect_branch(branch: impl Fn(f64) -> f64, desired: f64, lo: f64, hi: f64) -> f64 {
+    let (mut lo, mut hi) = (lo, hi);
+    if branch(lo) >= desired {
+        return lo;
+    }
+    if branch(hi) <= desired {
+        return hi;
+    }
+    for _ in 0..200 {
+        let mid = 0.5 * (lo + hi);
+        if branch(mid) < desired {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+    }
+    0.5 * (lo + hi)
 }
