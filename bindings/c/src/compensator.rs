@@ -6,12 +6,12 @@ use std::panic::{AssertUnwindSafe, catch_unwind};
 use hystcomp_io::compensator::{Method, ScaledCompensator, UnstableDelay};
 use hystcomp_io::model_file::{Direction, ModelFile, ModelFileError};
 
-use crate::{HYSTCOMP_ALLOW_UNSTABLE_DELAY, HystcompStatus};
 use crate::args::{
     clear_out, handle, non_finite_failure, normalised_scale, parameters, path_arg, run_signal,
     str_arg, write_out,
 };
 use crate::boundary::{Failure, boundary};
+use crate::{HYSTCOMP_ALLOW_UNSTABLE_DELAY, HystcompStatus};
 
 /// A feedforward compensator: desired position in, drive voltage out (opaque).
 ///

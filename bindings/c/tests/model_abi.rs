@@ -386,10 +386,12 @@ proptest! {
     fn one_shot_equals_the_compensator_sample_by_sample(
         seed in 0u64..1_000_000,
         len in 1usize..3000,
-        method_index in 0usize..4,
+        method_index in 0usize..5,
         limits in prop::option::of((0.0f64..3.0, 7.0f64..10.0)),
     ) {
-        let methods = [c"ihc", c"ihc-delayed", c"wihc", c"wihc-delayed"];
+        // Table 1's plain delayed WIHC can ring and is refused (see below); its guarded loop
+        // and the others run.
+        let methods = [c"ihc", c"ihc-delayed", c"wihc", c"wihc-guarded", c"ihc-guarded"];
         let method = methods[method_index];
         let path = model_path("table1-plant.json");
         let m = table1();
@@ -424,6 +426,25 @@ proptest! {
         }
         free(m);
     }
+}
+
+/// Table 1's delayed WIHC (loop gain 1.66: it can ring) is refused by every constructor with
+/// `HYSTCOMP_STATUS_UNSTABLE_DELAY` and the gain in the message.
+#[test]
+fn a_delayed_loop_that_can_ring_is_refused_from_memory_too() {
+    let m = table1();
+    let y_d = trajectory(3, 100);
+    let (status, _, _) = compensate(m, c"wihc-delayed", None, &y_d);
+    assert_eq!(status, HystcompStatus::UnstableDelay as c_int);
+    assert!(last_error().contains("1.659"), "{}", last_error());
+    let mut out = std::ptr::dangling_mut();
+    // SAFETY: a live handle, a valid string and out-pointer.
+    let status = unsafe {
+        hystcomp_compensator_from_model(m, c"wihc-delayed".as_ptr(), 0.0, 0.0, 0, &mut out)
+    };
+    assert_eq!(status, HystcompStatus::UnstableDelay as c_int);
+    assert!(out.is_null());
+    free(m);
 }
 
 #[test]

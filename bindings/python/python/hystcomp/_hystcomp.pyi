@@ -189,15 +189,18 @@ class Compensator:
     voltage out, in the physical units of its model file (e.g. um in, V out).
 
     - ``model``: a ``ModelFile`` or the path of one;
-    - ``method``: ``"ihc"``, ``"ihc-delayed"``, ``"wihc"``, ``"wihc-delayed"`` (plant models) or
-      ``"dihc"`` (inverse models);
+    - ``method``: ``"ihc"``, ``"ihc-delayed"``, ``"ihc-guarded"``, ``"wihc"``,
+      ``"wihc-delayed"``, ``"wihc-guarded"`` (plant models) or ``"dihc"`` (inverse models);
     - ``limits``: ``(min, max)`` drive limits in the model's voltage unit; by default the range
-      the model was identified on.
+      the model was identified on;
+    - ``allow_unstable_delay``: build ``"ihc-delayed"`` or ``"wihc-delayed"`` even when its loop
+      gain over the limits is 1 or more (it can then ring between the limits after a jump); by
+      default that raises ``UnstableDelayError``. The ``-guarded`` methods never oscillate.
 
     Every output lies within ``limits`` and is never NaN. ``step`` and ``process`` refuse NaN or
     infinite desired positions with ``InvalidValueError`` (state unchanged). Raises
-    ``WrongDirectionError``, ``NotInvertibleError`` (over the limits), ``InvalidValueError``,
-    ``ModelFileError`` or ``FileNotFoundError`` when it cannot be built."""
+    ``WrongDirectionError``, ``NotInvertibleError`` (over the limits), ``UnstableDelayError``,
+    ``InvalidValueError``, ``ModelFileError`` or ``FileNotFoundError`` when it cannot be built."""
 
     def __init__(
         self,
@@ -256,14 +259,17 @@ class Compensator:
         so this stays 0 here)."""
     @property
     def delayed_loop_gain(self) -> Optional[float]:
-        """IHC and WIHC methods: the worst-case gain of the family's delayed loop over the
-        limits (IHC ``max |3 a1 x^2| / (a2 + b_1 + ... + b_k)``, Table 1: 0.68; WIHC
-        ``max |3 a1 x^2 + b_1 + ... + b_k| / a2``, Table 1: 1.66); at or above 1 the plain
-        delayed loop can ring after a jump and is refused unless allowed. ``None`` for DIHC."""
+        """For the IHC and WIHC methods: the worst-case gain of the family's one-sample-delayed
+        loop over the limits, whatever the method's own mode: ``max |3 a1 x^2| / (a2 + b_1 +
+        ... + b_k)`` for IHC (Table 1: 0.68), ``max |3 a1 x^2 + b_1 + ... + b_k| / a2`` for WIHC
+        (eq. (9) with ``H[v](t - Ts)``; Table 1: 1.66). At or above 1 the plain delayed loop can
+        ring between the limits after a jump in the desired position and is refused unless
+        ``allow_unstable_delay=True``; the exact and ``-guarded`` methods never oscillate.
+        ``None`` for DIHC."""
     @property
     def guard_relaxation(self) -> Optional[float]:
-        """IHC and WIHC methods: the under-relaxation of the guarded delayed loop, in
-        ``(0, 1]``. ``None`` for DIHC."""
+        """For the IHC and WIHC methods: the under-relaxation of the family's guarded delayed
+        loop, in ``(0, 1]`` (1: the guarded loop is the plain one). ``None`` for DIHC."""
 
 class Identification:
     """An identified model: ``.model`` (a ``ModelFile``, physical scales and normalised

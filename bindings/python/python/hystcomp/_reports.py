@@ -128,6 +128,11 @@ class FitReport(_Report):
     min_branch_slope: float
     pso: Optional[Dict[str, Any]]
     elapsed_s: float
+    #: Plant models: ``{"ihc": ..., "wihc": ...}``, the gains of the delayed IHC and WIHC loops
+    #: over the fitted voltage range (below 1 they settle after any jump; at or above 1 they
+    #: can ring, and the plain delayed methods are refused unless allowed). ``None`` for
+    #: inverse models.
+    delayed_loop_gains: Optional[Dict[str, float]] = None
     extra: Dict[str, Any] = field(default_factory=dict)
 
 

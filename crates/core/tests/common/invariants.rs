@@ -100,6 +100,12 @@ pub fn check_plant_compensators<T: Real>(
     for (name, mode, exact) in [
         ("ihc", SolveMode::Exact, true),
         ("ihc-delayed", SolveMode::Delayed, false),
+        ("ihc-guarded", SolveMode::DelayedGuarded, false),
+        (
+            "ihc-delayed, unchecked",
+            SolveMode::DelayedAllowUnstable,
+            false,
+        ),
     ] {
         if let Ok(c) = Ihc::<T, Vec<T>>::new(plant, limits, mode) {
             compensators.push((name, Box::new(c), exact));
@@ -108,6 +114,12 @@ pub fn check_plant_compensators<T: Real>(
     for (name, mode, exact) in [
         ("wihc", SolveMode::Exact, true),
         ("wihc-delayed", SolveMode::Delayed, false),
+        ("wihc-guarded", SolveMode::DelayedGuarded, false),
+        (
+            "wihc-delayed, unchecked",
+            SolveMode::DelayedAllowUnstable,
+            false,
+        ),
     ] {
         if let Ok(c) = Wihc::<T, Vec<T>>::new(plant, limits, mode) {
             compensators.push((name, Box::new(c), exact));
