@@ -53,6 +53,7 @@ pub fn crossval_chain(
         limits,
         test,
         options.test_warmup,
+        options.unstable_delay,
     )?;
     Ok(ChainCrossValidation {
         crossval: CrossValidation {

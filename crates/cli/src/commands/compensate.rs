@@ -158,14 +158,9 @@ pub fn run(args: &Args, ctx: Context) -> Result<(), CliError> {
     } else {
         UnstableDelay::Refuse
     };
-    let mut compensator = ScaledCompensator::with_options(
-        &model,
-        args.method,
-        args.limits,
-        args.preview,
-        unstable,
-    )
-    .map_err(|e| build_error(e, args.method).context(args.model.display()))?;
+    let mut compensator =
+        ScaledCompensator::with_options(&model, args.method, args.limits, args.preview, unstable)
+            .map_err(|e| build_error(e, args.method).context(args.model.display()))?;
     let stage = match &args.stage {
         Some(path) => hystcomp_stage::StageConfig::from_toml_file(path)
             .map_err(|e| CliError::input(e.to_string()).context(path.display()))?,
