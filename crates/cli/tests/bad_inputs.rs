@@ -70,6 +70,18 @@ fn trajectory_csv() -> String {
     text
 }
 
+/// One period of a 5 Hz sine of 30 +- 10 um at the built-in stage's 10 kHz (time_s,
+/// desired_um), 2000 samples: what `learn --simulate` plays.
+fn desired_10khz_csv() -> String {
+    let mut text = String::from("time_s,desired_um\n");
+    for k in 0..2000 {
+        let t = k as f64 * 1e-4;
+        let y = 30.0 + 10.0 * (2.0 * std::f64::consts::PI * 5.0 * t).sin();
+        text.push_str(&format!("{t},{y}\n"));
+    }
+    text
+}
+
 /// A command record (time_s, volts) at `rate_hz`.
 fn volts_csv(rate_hz: f64, n: usize) -> String {
     let mut text = String::from("time_s,volts\n");
@@ -465,6 +477,29 @@ fn overwritten_inputs() -> Vec<(Fixture, Case)> {
         .output(f.path("models.json"))
     });
     add(&|f| {
+        // The last trial's drive and response (any records of the trajectory's length).
+        f.write("drive.csv", &trajectory_csv());
+        f.write("measured.csv", &trajectory_csv());
+        Case::refused(
+            "learn -o the last trial's drive",
+            [
+                "learn",
+                "--desired",
+                &f.arg("trajectory.csv"),
+                "--drive",
+                &f.arg("drive.csv"),
+                "--measured",
+                &f.arg("measured.csv"),
+                "--model",
+                &f.arg("table1-plant.json"),
+                "-o",
+                &f.arg("drive.csv"),
+            ],
+            1,
+            &["--output", "same file as --drive", "drive.csv"],
+        )
+    });
+    add(&|f| {
         std::fs::create_dir(f.path("report")).unwrap();
         std::fs::copy(f.path("stage.toml"), f.path("report/stage.toml")).unwrap();
         Case::refused(
@@ -518,6 +553,7 @@ fn the_protected_commands_still_write_new_outputs() {
 fn a_closed_stdout_ends_every_command_quietly() {
     let f = Fixture::new();
     f.write("test.csv", &record_csv());
+    f.write("desired.csv", &desired_10khz_csv());
     let commands: Vec<Vec<String>> = vec![
         vec![
             "--json",
@@ -582,6 +618,20 @@ fn a_closed_stdout_ends_every_command_quietly() {
         vec!["simulate", "--drive", "volts.csv", "-o", "response.csv"],
         vec!["bench", "--samples", "100", "--repeats", "1"],
         vec!["signal", "paper", "-o", "paper.csv"],
+        vec![
+            "learn",
+            "--simulate",
+            "--desired",
+            "desired.csv",
+            "--model",
+            "table1-plant.json",
+            "--trials",
+            "1",
+            "--periods",
+            "1",
+            "-o",
+            "next.csv",
+        ],
     ]
     .into_iter()
     .map(|args| args.into_iter().map(str::to_owned).collect())
@@ -1389,6 +1439,87 @@ fn matrix() -> Vec<(Fixture, Case)> {
             1,
             &["short.csv", "trajectory.csv"],
         )
+    });
+    add(&|f| {
+        Case::refused(
+            "signal with an amplitude no record may hold",
+            [
+                "signal",
+                "paper",
+                "--amplitude",
+                "1e308",
+                "--offset",
+                "1e308",
+                "-o",
+                &f.arg("signal.csv"),
+            ],
+            1,
+            &["--amplitude", "sample", "1e15"],
+        )
+        .output(f.path("signal.csv"))
+    });
+    add(&|f| {
+        Case::refused(
+            "signal of 1e12 s",
+            [
+                "signal",
+                "paper",
+                "--duration",
+                "1e12",
+                "-o",
+                &f.arg("signal.csv"),
+            ],
+            1,
+            &["--duration", "samples"],
+        )
+        .output(f.path("signal.csv"))
+    });
+    let learn = |f: &Fixture, extra: &[&str]| -> Vec<String> {
+        let mut args: Vec<String> = [
+            "learn",
+            "--simulate",
+            "--desired",
+            &f.write("desired.csv", &desired_10khz_csv()),
+            "--model",
+            &f.arg("table1-plant.json"),
+            "-o",
+            &f.arg("next.csv"),
+        ]
+        .map(str::to_owned)
+        .to_vec();
+        args.extend(extra.iter().map(|a| a.to_string()));
+        args
+    };
+    add(&|f| {
+        Case::refused(
+            "learn with a NaN gain",
+            learn(f, &["--gain", "NaN"]),
+            1,
+            &["--gain", "NaN"],
+        )
+        .output(f.path("next.csv"))
+    });
+    add(&|f| {
+        // 1000 trials of 1000 periods of 2000 samples: twice the 1e9 one run simulates.
+        let long: String = (0..1010)
+            .map(|k| {
+                let t = k as f64 * 1e-3;
+                format!(
+                    "{t},{}\n",
+                    30.0 + 10.0 * (2.0 * std::f64::consts::PI * t).sin()
+                )
+            })
+            .collect();
+        f.write("long.csv", &format!("time_s,desired_um\n{long}"));
+        let mut args = learn(f, &["--trials", "1000", "--periods", "1000"]);
+        args[3] = f.arg("long.csv");
+        Case::refused(
+            "learn of more stage samples than one run simulates",
+            learn(f, &["--trials", "1000", "--periods", "1000"]),
+            1,
+            &["--trials", "--periods", "1e9"],
+        )
+        .output(f.path("next.csv"))
     });
     add(&|f| {
         f.write("broken.toml", "sample_rate_hz = [1, 2\n");

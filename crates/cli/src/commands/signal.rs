@@ -11,6 +11,7 @@ use hystcomp_experiments::signals::{
     Chirp, MAX_SAMPLE_RATE_HZ, MAX_SAMPLES, MAX_SPEED, Multisine, PaperTrajectory, Raster, Shape,
     Signal, Steps, Sweep,
 };
+use hystcomp_io::data::MAX_MAGNITUDE;
 use serde::Serialize;
 
 use crate::files::{Files, NamesFiles};
@@ -142,6 +143,20 @@ struct Report<'a> {
 /// `hystcomp signal`.
 pub fn run(args: &Args, ctx: Context) -> Result<(), CliError> {
     let (column, values) = values(args)?;
+    // A record's values are at most MAX_MAGNITUDE (1e15) when read: write none that no
+    // command could read back (an --amplitude or --offset of 1e308 overflows to inf).
+    if let Some((k, v)) = values
+        .iter()
+        .enumerate()
+        .find(|(_, v)| !v.is_finite() || v.abs() > MAX_MAGNITUDE)
+    {
+        return Err(CliError::input(format!(
+            "--amplitude/--offset: sample {k} (t = {} s) would be {}, beyond the {MAX_MAGNITUDE:e} \
+             a record may hold; give a smaller --amplitude or --offset",
+            crate::number(k as f64 / args.sample_rate),
+            crate::number(*v),
+        )));
+    }
     let time: Vec<f64> = (0..values.len())
         .map(|k| k as f64 / args.sample_rate)
         .collect();
