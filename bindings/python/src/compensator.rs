@@ -23,7 +23,7 @@ pub enum ModelArg<'py> {
 }
 
 impl ModelArg<'_> {
-    fn load(self) -> PyResult<IoModelFile> {
+    pub(crate) fn load(self) -> PyResult<IoModelFile> {
         match self {
             ModelArg::File(f) => Ok(f.inner.clone()),
             ModelArg::Path(p) => IoModelFile::load(&p).map_err(errors::model_file),

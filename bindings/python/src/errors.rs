@@ -35,6 +35,8 @@ pub enum Kind {
     Identification,
     /// `StageConfigError(HystcompError, ValueError)`.
     StageConfig,
+    /// `LearningStoppedError(HystcompError, RuntimeError)`.
+    LearningStopped,
 }
 
 impl Kind {
@@ -47,6 +49,7 @@ impl Kind {
             Kind::ModelFile => "ModelFileError",
             Kind::Identification => "IdentificationError",
             Kind::StageConfig => "StageConfigError",
+            Kind::LearningStopped => "LearningStoppedError",
         }
     }
 }

@@ -10,7 +10,8 @@
 //! - `identify`: `identify(...)` (hystcomp-identify);
 //! - `stage`: `Stage`, `StageResponse` (hystcomp-stage);
 //! - `indices`: `e_m`, `e_rms`, `e_mhe`, `tracking_indices` (hystcomp-experiments);
-//! - `study`: `reproduce(...)` (hystcomp-experiments' study).
+//! - `study`: `reproduce(...)` (hystcomp-experiments' study);
+//! - `learn`: `Learner` (hystcomp-learn: iterative learning between trials).
 //!
 //! Every argument is validated before it reaches the library, and every library error becomes
 //! a Python exception with the library's message (module `errors`); no panic is relied upon.
@@ -20,6 +21,7 @@ mod compensator;
 mod errors;
 mod identify;
 mod indices;
+mod learn;
 mod model;
 mod stage;
 mod study;
@@ -43,6 +45,7 @@ fn _hystcomp(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<stage::StageResponse>()?;
     m.add_class::<indices::TrackingIndices>()?;
     m.add_class::<study::StudyResult>()?;
+    m.add_class::<learn::Learner>()?;
     m.add_function(wrap_pyfunction!(identify::identify, m)?)?;
     m.add_function(wrap_pyfunction!(indices::e_m, m)?)?;
     m.add_function(wrap_pyfunction!(indices::e_rms, m)?)?;

@@ -174,6 +174,17 @@ impl Learner {
         }
         check_finite("desired", desired)?;
         let n = desired.len();
+        let most_bins = (n / 10).max(1);
+        if options.mhe_bins > most_bins {
+            return Err(LearnError::Option {
+                option: "e_mhe bins",
+                value: options.mhe_bins.to_string(),
+                reason: format!(
+                    "a trial of {n} samples supports at most {most_bins} bins (10 samples per \
+                     bin on average; with fewer, e_mhe underestimates the loop)"
+                ),
+            });
+        }
         if options.lead_samples >= n {
             return Err(LearnError::Option {
                 option: "lead",

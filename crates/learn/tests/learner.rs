@@ -153,10 +153,17 @@ fn resume_recovers_the_reference_from_the_drive() {
     assert_eq!(resumed.drive(), learner.drive());
 }
 
+/// The defaults at 100 Hz with e_mhe over 10 bins (a 100-sample trial holds no more).
+fn options() -> LearningOptions {
+    let mut options = LearningOptions::new(100.0);
+    options.mhe_bins = 10;
+    options
+}
+
 #[test]
 fn bad_records_and_options_are_refused_with_their_names() {
     let desired = sine(100, 35.0, 20.0);
-    let mut learner = Learner::new(&table1(), &desired, LearningOptions::new(100.0)).unwrap();
+    let mut learner = Learner::new(&table1(), &desired, options()).unwrap();
     let short = learner.update(&desired[..50]).unwrap_err();
     assert!(short.to_string().contains("50 samples"), "{short}");
     let mut nan = desired.clone();
@@ -185,22 +192,21 @@ fn bad_records_and_options_are_refused_with_their_names() {
             Box::new(|o: &mut LearningOptions| o.filter_order = 0),
             "filter order",
         ),
+        (
+            // 100 samples hold 10 bins of 10 samples: 11 would read e_mhe low.
+            Box::new(|o: &mut LearningOptions| o.mhe_bins = 11),
+            "e_mhe bins",
+        ),
     ] {
-        let mut options = LearningOptions::new(100.0);
+        let mut options = options();
         set(&mut options);
         let e = Learner::new(&table1(), &desired, options).unwrap_err();
         assert!(e.to_string().starts_with(name), "{e}");
     }
     let mut inverse = table1();
     inverse.direction = hystcomp_io::model_file::Direction::Inverse;
-    let e = Learner::new(&inverse, &desired, LearningOptions::new(100.0)).unwrap_err();
+    let e = Learner::new(&inverse, &desired, options()).unwrap_err();
     assert!(e.to_string().contains("plant model"), "{e}");
-    let e = Learner::resume(
-        &table1(),
-        &desired,
-        &vec![11.0; 100],
-        LearningOptions::new(100.0),
-    )
-    .unwrap_err();
+    let e = Learner::resume(&table1(), &desired, &vec![11.0; 100], options()).unwrap_err();
     assert!(e.to_string().contains("leaves the limits"), "{e}");
 }

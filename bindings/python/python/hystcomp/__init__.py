@@ -17,10 +17,12 @@ and out):
   (``.time``, ``.inputs``, ``.outputs``, the internal signals; unpacks as ``t, y = ...``),
   plotted by ``plot_response``;
 - ``e_m``, ``e_rms``, ``e_mhe``, ``tracking_indices``: the indices of section 4.3;
-- ``reproduce()``: the paper's comparative study (Table 3) on the simulated stage.
+- ``reproduce()``: the paper's comparative study (Table 3) on the simulated stage;
+- ``Learner``: iterative learning feedforward for a repeated motion, ``drive =
+  learner.update(measured)`` between trials.
 
 Reports are dataclasses with the fields of the command line's JSON: ``FitReport``
-(``Identification.report``), ``Diagnostics``, ``Clamps``, ``StudySummary``.
+(``Identification.report``), ``Diagnostics``, ``Clamps``, ``StudySummary``, ``LearningUpdate``, ``LearningLaw``.
 
 Errors are ``HystcompError`` subclasses (also ``ValueError``) or ``OSError`` for files.
 """
@@ -33,6 +35,8 @@ from ._errors import (
     HystcompError,
     IdentificationError,
     InvalidValueError,
+    LearningDivergedWarning,
+    LearningStoppedError,
     ModelFileError,
     NotInvertibleError,
     StageConfigError,
@@ -47,6 +51,8 @@ from ._reports import (
     ErrorStats,
     FitReport,
     Indices,
+    LearningLaw,
+    LearningUpdate,
     PipelineSummary,
     RunSummary,
     SampleCounts,
@@ -58,6 +64,7 @@ from ._hystcomp import (
     DEFAULT_MHE_BINS,
     Compensator,
     Identification,
+    Learner,
     ModelFile,
     Mpim,
     Scale,
@@ -82,6 +89,8 @@ __all__ = [
     "ErrorStats",
     "FitReport",
     "Indices",
+    "LearningLaw",
+    "LearningUpdate",
     "PipelineSummary",
     "RunSummary",
     "SampleCounts",
@@ -97,6 +106,9 @@ __all__ = [
     "IdentificationError",
     "Ihc",
     "InvalidValueError",
+    "Learner",
+    "LearningDivergedWarning",
+    "LearningStoppedError",
     "ModelFile",
     "ModelFileError",
     "Mpim",

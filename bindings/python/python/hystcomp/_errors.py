@@ -11,6 +11,8 @@ __all__ = [
     "ModelFileError",
     "IdentificationError",
     "StageConfigError",
+    "LearningStoppedError",
+    "LearningDivergedWarning",
 ]
 
 
@@ -54,6 +56,17 @@ class StageConfigError(HystcompError, ValueError):
     """A stage file (TOML) does not parse or holds a physically impossible value."""
 
 
+class LearningStoppedError(HystcompError, RuntimeError):
+    """The divergence guard stopped the learning earlier (``Learner.stopped``): the learner
+    refuses further updates; its ``drive`` is the last good one. Start a new ``Learner`` with a
+    lower gain or bandwidth."""
+
+
+class LearningDivergedWarning(UserWarning):
+    """A trial's RMS error exceeded the divergence factor times the best trial's: the learning
+    stopped, and ``Learner.update`` returned the last good drive instead of a new one."""
+
+
 for _cls in (
     HystcompError,
     InvalidValueError,
@@ -63,6 +76,8 @@ for _cls in (
     ModelFileError,
     IdentificationError,
     StageConfigError,
+    LearningStoppedError,
+    LearningDivergedWarning,
 ):
     _cls.__module__ = "hystcomp"
 del _cls

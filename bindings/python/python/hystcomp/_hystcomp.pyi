@@ -12,7 +12,7 @@ from typing import Any, Dict, Iterator, List, Optional, Sequence, Tuple, Union
 import numpy as np
 import numpy.typing as npt
 
-from ._reports import Clamps, Diagnostics, FitReport, StudySummary
+from ._reports import Clamps, Diagnostics, FitReport, LearningLaw, LearningUpdate, StudySummary
 
 ArrayLike = Union[npt.ArrayLike, Sequence[float]]
 FloatArray = npt.NDArray[np.float64]
@@ -462,6 +462,108 @@ def e_mhe(desired: ArrayLike, measured: ArrayLike, bins: int = 100) -> float:
 def tracking_indices(desired: ArrayLike, measured: ArrayLike, bins: int = 100) -> TrackingIndices:
     """All three indices of ``measured`` (``y``) against ``desired`` (``y_d``); ``bins`` as for
     :func:`e_mhe` (at least 10 samples per bin on average)."""
+
+class Learner:
+    """Iterative learning feedforward for a repeated motion (raster scans, periodic patterns): the
+    learner keeps the reference its exact inverse (IHC or WIHC of the plant ``model``) follows,
+    and after each trial moves it by the filtered error,
+    ``r_k+1 = sat(r_k + Q[gamma z^m e_k])``, ``e_k = y_d - y_k`` (Leang & Devasia 2006,
+    doi:10.1016/j.mechatronics.2005.11.006; Longman 2000, doi:10.1080/002071700405905; ``Q`` a
+    zero-phase low-pass). The law is in the crate ``hystcomp-learn``'s documentation and in
+    ``law``.
+
+    - ``model``: a plant ``ModelFile`` (voltage -> displacement) or the path of one;
+    - ``desired``: one trial of the desired trajectory (``2`` to ``5_000_000`` samples, the
+      model's displacement unit), one whole period of a periodic motion when ``periodic``;
+    - ``sample_rate_hz``: the records' sample rate;
+    - ``drive``: the drive of the first trial, if not the exact inverse's own (any
+      compensator's, or an earlier learner's): the reference is recovered from it by the model;
+    - ``gain`` (``gamma``, default 0.8, at most 10), ``bandwidth_hz`` (``Q``'s cut-off; default
+      a hundredth of the sample rate, a quarter for a model with a vibration link),
+      ``filter_order`` (1 to 8, default 4), ``lead_samples`` (``m``, 0 to 1000),
+      ``divergence_factor`` (above 1, default 1.5), ``inverse`` (``"ihc"`` or ``"wihc"``),
+      ``limits`` (``(min, max)`` drive limits, by default the model's identified range),
+      ``mhe_bins`` (bins of e_mhe).
+
+    The loop: send ``learner.drive`` to the stage (periodic: play it until the motion is
+    periodic, record the last period), then ``drive = learner.update(measured)`` and repeat.
+    Every drive lies within ``limits`` and is never NaN. When a trial's e_rms exceeds
+    ``divergence_factor`` times the best trial's, the divergence guard stops the learning:
+    ``update`` warns (``LearningDivergedWarning``) and returns the best trial's drive (the last
+    good one), ``stopped`` turns true and further updates raise ``LearningStoppedError``.
+    Raises ``InvalidValueError`` for a bad option or record (naming it), ``WrongDirectionError``
+    for an inverse model, ``NotInvertibleError`` when the model cannot be inverted over the
+    limits."""
+
+    def __init__(
+        self,
+        model: Union[ModelFile, PathLike],
+        desired: ArrayLike,
+        sample_rate_hz: float,
+        drive: Optional[ArrayLike] = None,
+        *,
+        periodic: bool = True,
+        gain: float = 0.8,
+        bandwidth_hz: Optional[float] = None,
+        filter_order: int = 4,
+        lead_samples: int = 0,
+        divergence_factor: float = 1.5,
+        inverse: str = "ihc",
+        limits: Optional[Sequence[float]] = None,
+        mhe_bins: int = 100,
+    ) -> None:
+        """A learner for one trial of ``desired``, starting from the exact inverse's drive for
+        it or from ``drive``. Raises InvalidValueError (naming the option or record),
+        WrongDirectionError (an inverse model), NotInvertibleError, ModelFileError or an
+        OSError for the file."""
+    def update(self, measured: ArrayLike) -> FloatArray:
+        """The trial's measured response (array-like, aligned sample by sample with ``desired``
+        and the drive that was sent) in; the next trial's drive (numpy array) out. Refuses a
+        record of another length or with a NaN or infinite sample (``InvalidValueError``, state
+        unchanged). When the divergence guard trips on this trial, warns with
+        ``LearningDivergedWarning`` and returns the last good drive; after that, raises
+        ``LearningStoppedError``. ``last_update`` holds the trial's indices and the prediction
+        for the next. Releases the GIL while it computes."""
+    @property
+    def drive(self) -> FloatArray:
+        """The drive of the next trial (numpy array, the model's voltage unit): within the limits,
+        never NaN; after the divergence guard stopped the learning, the last good drive."""
+    @property
+    def reference(self) -> FloatArray:
+        """The reference the exact inverse follows in the next trial (numpy array, the model's
+        displacement unit)."""
+    @property
+    def desired(self) -> FloatArray:
+        """The desired trajectory of one trial (numpy array)."""
+    @property
+    def trials(self) -> int:
+        """Trials measured so far (the next ``update`` measures trial ``trials``; trial 0 ran the
+        first drive)."""
+    @property
+    def history(self) -> List[TrackingIndices]:
+        """The indices of every trial measured so far (``TrackingIndices``, % of the desired
+        range)."""
+    @property
+    def best_trial(self) -> Optional[int]:
+        """The best trial measured so far (lowest e_rms), or ``None`` before the first update."""
+    @property
+    def best_drive(self) -> Optional[FloatArray]:
+        """The best trial's drive (numpy array: the last good drive), or ``None``."""
+    @property
+    def stopped(self) -> bool:
+        """Whether the divergence guard stopped the learning."""
+    @property
+    def last_update(self) -> Optional[LearningUpdate]:
+        """The last trial's outcome, a ``LearningUpdate`` dataclass (``trial``, ``indices``,
+        ``predicted`` indices of the next trial, ``clamped_samples`` of the next reference,
+        ``status``), or ``None`` before the first update."""
+    @property
+    def law(self) -> LearningLaw:
+        """The learning law in force, a ``LearningLaw`` dataclass: ``gain``, ``lead_samples``,
+        ``bandwidth_hz``, ``filter_order``, ``periodic``, ``padding_samples``, ``noise_gain``,
+        ``stationary_noise_ratio`` (the learned reference's noise variance relative to the
+        sensor's, bounded: noise is not amplified trial after trial), ``divergence_factor``,
+        ``inverse``, ``limits``, ``model_has_vibration``."""
 
 class StudyResult:
     """The result of ``reproduce()``: the paper's Table 3 measured on the simulated stage.

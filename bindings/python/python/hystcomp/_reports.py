@@ -239,3 +239,50 @@ class StudySummary(_Report):
     identification_holdout: float = 0.0
     series: List[SeriesFile] = field(default_factory=list)
     extra: Dict[str, Any] = field(default_factory=dict)
+
+
+@dataclass(frozen=True)
+class LearningUpdate(_Report):
+    """One learning trial (``Learner.last_update``; ``hystcomp learn --json``'s trial): its
+    number (0: the first drive), its ``indices``, the indices ``predicted`` for the next trial
+    by the law's linear model (``None`` once the guard stopped the learning), the samples of
+    the next reference clamped into the reachable range, and ``status`` (``{"state":
+    "learning"}`` or ``{"state": "diverged", "e_rms_percent", "best_trial",
+    "best_e_rms_percent", "factor"}``)."""
+
+    trial: int
+    indices: Indices
+    predicted: Optional[Indices]
+    clamped_samples: int
+    status: Dict[str, Any]
+    extra: Dict[str, Any] = field(default_factory=dict)
+
+    @property
+    def diverged(self) -> bool:
+        """Whether the divergence guard stopped the learning on this trial."""
+        return self.status.get("state") == "diverged"
+
+
+@dataclass(frozen=True)
+class LearningLaw(_Report):
+    """The learning law ``r_k+1 = sat(r_k + Q[gamma z^m e_k])`` in force (``Learner.law``):
+    ``gain`` (gamma), ``lead_samples`` (m), ``Q``'s ``bandwidth_hz`` and ``filter_order``,
+    ``periodic``, ``padding_samples`` of a finite record, ``noise_gain`` (share of white sensor
+    noise's variance one update passes on), ``stationary_noise_ratio`` (the learned reference's
+    noise variance relative to the sensor's after many trials: bounded, ``None`` if the update
+    does not contract), ``divergence_factor``, ``inverse``, drive ``limits`` and
+    ``model_has_vibration``."""
+
+    gain: float
+    lead_samples: int
+    bandwidth_hz: float
+    filter_order: int
+    periodic: bool
+    padding_samples: int
+    noise_gain: float
+    stationary_noise_ratio: Optional[float]
+    divergence_factor: float
+    inverse: str
+    limits: List[float]
+    model_has_vibration: bool
+    extra: Dict[str, Any] = field(default_factory=dict)
