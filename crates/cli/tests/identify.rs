@@ -814,3 +814,102 @@ fn given_thresholds_are_used() {
         stdout(&out)
     );
 }
+
+/// `identify --for-delayed` on the real DBO record: both delayed gains below the bound in the
+/// report and the model file, the cost in fit RMS said, and `compensate` runs the plain delayed
+/// WIHC it refuses on the model fitted without the flag (loop gain 3.15), naming the flag.
+#[test]
+fn for_delayed_fits_a_model_compensate_runs_with_the_delayed_loops() {
+    let Some(record) = hystcomp_testkit::dbo_record("Model_Vi_Do.dat") else {
+        return;
+    };
+    let dir = tempfile::tempdir().unwrap();
+    let free = dir.path().join("free.json");
+    let bounded = dir.path().join("bounded.json");
+    let base = [
+        "identify",
+        "--data",
+        s(&record),
+        "--voltage-column",
+        "1",
+        "--displacement-column",
+        "5",
+    ];
+    let out = hystcomp(&[&base[..], &["-o", s(&free)]].concat());
+    assert!(out.status.success(), "{}", stderr(&out));
+    assert!(
+        stdout(&out).contains("identify with --for-delayed"),
+        "{}",
+        stdout(&out)
+    );
+    let out = hystcomp(
+        &[
+            &["--json"],
+            &base[..],
+            &["--for-delayed", "-o", s(&bounded)],
+        ]
+        .concat(),
+    );
+    assert!(out.status.success(), "{}", stderr(&out));
+    let report: Value = serde_json::from_slice(&out.stdout).unwrap();
+    let report = if report.get("report").is_some() {
+        &report["report"]
+    } else {
+        &report
+    };
+    let gains = &report["delayed_loop_gains"];
+    for which in ["ihc", "wihc"] {
+        let g = gains[which].as_f64().unwrap();
+        assert!(g <= 0.9 + 1e-9, "{which} {g}: {report}");
+    }
+    let c = &report["delayed_constraint"];
+    assert_eq!(c["bound"].as_f64(), Some(0.9), "{report}");
+    let free_rms = c["unconstrained_fit_rms_percent"].as_f64().unwrap();
+    let rms = report["fit"]["rms_percent"].as_f64().unwrap();
+    eprintln!("DBO --for-delayed: fit RMS {rms:.4} % against {free_rms:.4} % without the bound");
+    assert!(rms >= free_rms - 1e-9 && rms < 3.0 * free_rms, "{report}");
+    assert!(
+        c["unconstrained_gains"]["wihc"].as_f64().unwrap() > 1.0,
+        "{report}"
+    );
+    // The model file carries the same report.
+    let text = std::fs::read_to_string(&bounded).unwrap();
+    assert!(text.contains("delayed_constraint"), "{text}");
+
+    let trajectory = dir.path().join("trajectory.csv");
+    let mut csv = String::from("time_s,desired_um\n");
+    for k in 0..400 {
+        let t = k as f64 * 1e-3;
+        let y = -96.0 + 15.0 * (2.0 * std::f64::consts::PI * 2.0 * t).sin();
+        csv.push_str(&format!("{t},{y}\n"));
+    }
+    std::fs::write(&trajectory, csv).unwrap();
+    let drive = dir.path().join("drive.csv");
+    let compensate = |model: &Path| {
+        hystcomp(&[
+            "compensate",
+            "--model",
+            s(model),
+            "--method",
+            "wihc-delayed",
+            "--desired",
+            s(&trajectory),
+            "-o",
+            s(&drive),
+        ])
+    };
+    let refused = compensate(&free);
+    assert_eq!(refused.status.code(), Some(1), "{}", stderr(&refused));
+    assert!(
+        stderr(&refused).contains("--allow-unstable-delay"),
+        "{}",
+        stderr(&refused)
+    );
+    let out = compensate(&bounded);
+    assert!(
+        out.status.code() == Some(0) || out.status.code() == Some(4),
+        "{}",
+        stderr(&out)
+    );
+    assert!(drive.exists());
+}

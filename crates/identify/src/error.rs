@@ -118,7 +118,8 @@ impl fmt::Display for IdentifyError {
                  fitted samples is {correlation:.3} (at least {minimum} is needed; a piezo \
                  record has about 0.95 or more). Check the columns (--voltage-column, \
                  --displacement-column), the sign (a sensor that reads lower as the stage \
-                 extends needs a negative --displacement-factor) and the factors"
+                 extends needs a negative --displacement-factor) and the factors; \
+                 --accept-poor-fit fits it anyway"
             ),
             IdentifyError::SameSignal => write!(
                 f,

@@ -10,7 +10,9 @@ use serde::{Deserialize, Serialize};
 use crate::options::{
     AUTO_WARMUP_LEVEL, MAX_REGRESSOR_VALUES, MIN_CORRELATION, SAMPLES_PER_PARAMETER,
 };
-use crate::report::{DelayedGains, ErrorStats, FitReport, SampleCounts, SignalRange};
+use crate::report::{
+    DelayedConstraint, DelayedGains, ErrorStats, FitReport, SampleCounts, SignalRange,
+};
 use crate::{
     FitProblem, IdentifyError, IdentifyOptions, LeastSquares, Method, NoObserver, Observer,
     OutputOffset, Parameters, ParticleSwarm, ProblemData, Solver, Warmup,
@@ -155,7 +157,11 @@ pub fn identify_observed(
             });
         }
     }
-    check_rises(&voltage[fit.clone()], &displacement[fit.clone()])?;
+    check_rises(
+        &voltage[fit.clone()],
+        &displacement[fit.clone()],
+        options.max_fit_rms_percent.is_some(),
+    )?;
     let y_reference = match options.offset {
         OutputOffset::Fit | OutputOffset::None => y_min,
         OutputOffset::Value(v) => v,
@@ -174,6 +180,37 @@ pub fn identify_observed(
         fit_offset,
         options.margin,
     )?;
+    // For delayed compensation: the same problem with both delayed loops' gains bounded, and
+    // what the bound costs (the least-squares optimum without those rows, and its gains).
+    let (problem, delayed_constraint) = match options.delayed_loop_bound {
+        Some(bound) if options.direction == Direction::Plant => {
+            let free = LeastSquares.solve(&problem, &mut NoObserver)?;
+            let free_parameters = problem.parameters(&free.theta);
+            let unconstrained_gains = Mpim::<f64, Vec<f64>>::new(
+                &thresholds,
+                &free_parameters.weights,
+                free_parameters.a1,
+                free_parameters.a2,
+            )
+            .map_or(
+                DelayedGains {
+                    ihc: f64::NAN,
+                    wihc: f64::NAN,
+                },
+                |m| DelayedGains::of(&m, 0.0, 1.0),
+            );
+            let constrained = problem.with_delayed_loop_bound(bound)?;
+            (
+                constrained,
+                Some(DelayedConstraint {
+                    bound,
+                    unconstrained_fit_rms_percent: 100.0 * free.cost,
+                    unconstrained_gains,
+                }),
+            )
+        }
+        _ => (problem, None),
+    };
     // NaN counts as ill-conditioned too.
     let condition = problem.condition_number();
     if condition.is_nan() || condition > options.max_condition {
@@ -279,6 +316,7 @@ pub fn identify_observed(
         min_branch_slope: slope.slope,
         delayed_loop_gains: (options.direction == Direction::Plant)
             .then(|| DelayedGains::of(&model, 0.0, 1.0)),
+        delayed_constraint,
         pso: match &options.method {
             Method::ParticleSwarm(pso) => Some(pso.clone()),
             Method::LeastSquares => None,
@@ -342,12 +380,18 @@ pub(crate) fn correlation(a: &[f64], b: &[f64]) -> f64 {
 /// Refuses fitted samples whose displacement does not rise with the voltage (Pearson
 /// correlation below [`MIN_CORRELATION`]: wrong column, wrong sign, a column of noise) or is
 /// an exact linear function of it (the same column given twice: a trivial fit).
-pub(crate) fn check_rises(voltage: &[f64], displacement: &[f64]) -> Result<(), IdentifyError> {
+/// `refuse_poor` false (`--accept-poor-fit`) lets a low correlation through; the same column
+/// twice is always refused.
+pub(crate) fn check_rises(
+    voltage: &[f64],
+    displacement: &[f64],
+    refuse_poor: bool,
+) -> Result<(), IdentifyError> {
     if voltage == displacement {
         return Err(IdentifyError::SameSignal);
     }
     let r = correlation(voltage, displacement);
-    if r.is_nan() || r < MIN_CORRELATION {
+    if refuse_poor && (r.is_nan() || r < MIN_CORRELATION) {
         return Err(IdentifyError::NotRising {
             correlation: r,
             minimum: MIN_CORRELATION,

@@ -93,14 +93,19 @@ pub use error::IdentifyError;
 pub use identification::{Identification, identify, identify_observed};
 pub use ls::LeastSquares;
 pub use options::{
-    AUTO_WARMUP_LEVEL, DEFAULT_MARGIN, DEFAULT_MAX_CONDITION, DEFAULT_MAX_FIT_RMS_PERCENT,
-    DEFAULT_OPERATORS, IdentifyOptions, MAX_OPERATORS, MAX_REGRESSOR_VALUES, MIN_CORRELATION,
-    Method, OutputOffset, SAMPLES_PER_PARAMETER, Thresholds, Warmup,
+    AUTO_WARMUP_LEVEL, DEFAULT_DELAYED_LOOP_BOUND, DEFAULT_MARGIN, DEFAULT_MAX_CONDITION,
+    DEFAULT_MAX_FIT_RMS_PERCENT, DEFAULT_OPERATORS, IdentifyOptions, MAX_OPERATORS,
+    MAX_REGRESSOR_VALUES, MIN_CORRELATION, Method, OutputOffset, SAMPLES_PER_PARAMETER, Thresholds,
+    Warmup,
 };
-pub use problem::{Constraint, ConstraintKind, FitProblem, Parameters, ProblemData};
+pub use problem::{
+    Constraint, ConstraintKind, DelayedCompensator, FitProblem, Parameters, ProblemData,
+};
 pub use pso::{
     CONSTRICTION_ACCELERATION, CONSTRICTION_INERTIA, MAX_ITERATIONS, MAX_PARTICLES, ParticleSwarm,
     PsoBounds, PsoOptions,
 };
-pub use report::{DelayedGains, ErrorStats, FitReport, SampleCounts, SignalRange};
+pub use report::{
+    DelayedConstraint, DelayedGains, ErrorStats, FitReport, SampleCounts, SignalRange,
+};
 pub use solver::{NoObserver, Observer, Progress, Solution, Solver};

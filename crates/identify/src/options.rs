@@ -36,6 +36,12 @@ pub const MIN_CORRELATION: f64 = 0.5;
 /// [`IdentifyOptions::max_fit_rms_percent`].
 pub const DEFAULT_MAX_FIT_RMS_PERCENT: f64 = 10.0;
 
+/// The default bound on both delayed loops' gains of a model identified for delayed
+/// compensation ([`IdentifyOptions::delayed_loop_bound`], the command line's `--for-delayed`):
+/// 10 % below 1, so that after a jump the delayed loop's error shrinks by at least 10 % a
+/// sample (to 1 % of itself within 44 samples) with room for the model's rounding.
+pub const DEFAULT_DELAYED_LOOP_BOUND: f64 = 0.9;
+
 /// The most play operators identification fits (1000): the least-squares problem and its
 /// checks grow with the square of the operators (1000 operators: about 12 s and 55 MB on the
 /// DBO record; 5000 took 2 GB).
@@ -215,6 +221,13 @@ pub struct IdentifyOptions {
     /// ([`DEFAULT_MAX_FIT_RMS_PERCENT`]); `None` accepts any fit (the command line's
     /// `--accept-poor-fit`).
     pub max_fit_rms_percent: Option<f64>,
+    /// Plant models meant for one-sample-delayed compensation: both delayed loops' gains
+    /// (delayed IHC and WIHC, over the whole reachable state) constrained to at most this
+    /// bound, in `(0, 1)` ([`DEFAULT_DELAYED_LOOP_BOUND`] from the command line's
+    /// `--for-delayed`); the report gives what it costs in fit RMS. `None`: not constrained
+    /// (the gains are reported, and `hystcomp compensate` refuses a plain delayed loop whose
+    /// gain is 1 or more). Ignored for inverse models, which have no delayed loop.
+    pub delayed_loop_bound: Option<f64>,
     /// Unit of the voltage samples, written to the model file.
     pub voltage_unit: String,
     /// Unit of the displacement samples, written to the model file.
@@ -233,6 +246,7 @@ impl Default for IdentifyOptions {
             margin: DEFAULT_MARGIN,
             max_condition: DEFAULT_MAX_CONDITION,
             max_fit_rms_percent: Some(DEFAULT_MAX_FIT_RMS_PERCENT),
+            delayed_loop_bound: None,
             voltage_unit: "V".to_owned(),
             displacement_unit: "um".to_owned(),
         }
@@ -243,6 +257,16 @@ impl IdentifyOptions {
     /// Checks the options that do not depend on the data.
     pub fn validate(&self) -> Result<(), IdentifyError> {
         self.thresholds.values()?;
+        if let Some(bound) = self.delayed_loop_bound
+            && !(bound > 0.0 && bound < 1.0)
+        {
+            return Err(IdentifyError::InvalidOption {
+                option: "delayed loop bound",
+                value: bound.to_string(),
+                reason: "the delayed loops' gain bound must lie strictly between 0 and 1"
+                    .to_owned(),
+            });
+        }
         if !(self.holdout.is_finite() && (0.0..1.0).contains(&self.holdout)) {
             return Err(IdentifyError::InvalidOption {
                 option: "holdout",

@@ -48,6 +48,16 @@
 //!   (`hystcomp_core::Mpim::delayed_wihc_loop_gain`) that decides whether the loop settles
 //!   after a jump: a model meeting them may still ring when that gain exceeds 1.
 //!
+//! - **both delayed loops, for delayed compensation** (plant models, only when asked:
+//!   [`FitProblem::with_delayed_loop_bound`], the command line's `--for-delayed`): the loop
+//!   gains of `hystcomp_core::Mpim::delayed_wihc_loop_gain` and `delayed_ihc_loop_gain` at
+//!   most a bound `rho < 1` at every branch checkpoint `(k, x)` (exactly the points where the
+//!   core computes them, so the bound holds over the whole reachable state). With
+//!   `S_k = b_1 + ... + b_k` each is linear in the parameters: the delayed WIHC's
+//!   `|3 a1 x^2 + S_k| <= rho a2` is `rho a2 -+ (3 a1 x^2 + S_k) >= margin`, the delayed IHC's
+//!   `|3 a1 x^2| <= rho (a2 + S_k)` (the PI part is positive by its own rows) is
+//!   `rho (a2 + S_k) -+ 3 a1 x^2 >= margin`.
+//!
 //! Rows that coincide are kept once.
 //!
 //! # Extra regressors
@@ -121,11 +131,35 @@ pub enum ConstraintKind {
         /// `+1` or `-1`.
         sign: f64,
     },
+    /// `rho a2 - sign (3 a1 x^2 + b_1 + ... + b_k) >= margin` (delayed WIHC) or
+    /// `rho (a2 + b_1 + ... + b_k) - sign 3 a1 x^2 >= margin` (delayed IHC): the loop gain of
+    /// that delayed compensator at most `rho` on the branch `(k, x)`
+    /// ([`FitProblem::with_delayed_loop_bound`]).
+    DelayedLoopGain {
+        /// `"ihc"` or `"wihc"`.
+        compensator: DelayedCompensator,
+        /// Number of moving operators `k`.
+        active_operators: usize,
+        /// Normalised input `x`.
+        input: f64,
+        /// `+1` or `-1`.
+        sign: f64,
+    },
     /// `EXTRA_ROW_SCALE e_j >= margin`: an extra regressor's parameter is non-negative.
     ExtraNonNegative {
         /// Which extra parameter (0-based).
         index: usize,
     },
+}
+
+/// Which one-sample-delayed compensator a [`ConstraintKind::DelayedLoopGain`] row bounds.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum DelayedCompensator {
+    /// The delayed IHC (eq. (5) with the previous drive in the cubic term).
+    Ihc,
+    /// The delayed WIHC (eq. (9)).
+    Wihc,
 }
 
 /// One linear constraint `coefficients . theta >= margin` on the problem's parameter vector.
@@ -179,6 +213,8 @@ pub struct FitProblem {
     condition: f64,
     constraints: Vec<Constraint>,
     margin: f64,
+    /// The bound on both delayed loops' gains, when constrained.
+    delayed_loop_bound: Option<f64>,
 }
 
 impl FitProblem {
@@ -319,9 +355,36 @@ impl FitProblem {
             condition,
             constraints: Vec::new(),
             margin,
+            delayed_loop_bound: None,
         };
         problem.constraints = problem.build_constraints();
         Ok(problem)
+    }
+
+    /// The same problem, with both delayed loops' gains constrained to at most `bound` over
+    /// the whole reachable state (see the [module documentation](self)): for plant models
+    /// meant for one-sample-delayed compensation. `bound` must lie in `(0, 1)`; inverse models
+    /// (no delayed loop) are returned unchanged.
+    pub fn with_delayed_loop_bound(mut self, bound: f64) -> Result<Self, IdentifyError> {
+        if !(bound > 0.0 && bound < 1.0) {
+            return Err(IdentifyError::InvalidOption {
+                option: "delayed loop bound",
+                value: bound.to_string(),
+                reason: "the delayed loops' gain bound must lie strictly between 0 and 1"
+                    .to_owned(),
+            });
+        }
+        if self.direction != Direction::Plant {
+            return Ok(self);
+        }
+        self.delayed_loop_bound = Some(bound);
+        self.constraints = self.build_constraints();
+        Ok(self)
+    }
+
+    /// The bound on both delayed loops' gains, when the problem constrains them.
+    pub fn delayed_loop_bound(&self) -> Option<f64> {
+        self.delayed_loop_bound
     }
 
     /// The number of entries of the parameter vector.
@@ -582,6 +645,44 @@ impl FitProblem {
                     push(
                         full,
                         ConstraintKind::DelayedWihc { input: x, sign },
+                        &mut rows,
+                    );
+                }
+            }
+        }
+        if let (Direction::Plant, Some(rho)) = (self.direction, self.delayed_loop_bound) {
+            let mut checkpoints = Vec::new();
+            branch_checkpoints(&self.thresholds, lo, hi, |k, x| checkpoints.push((k, x)));
+            for (k, x) in checkpoints {
+                for sign in [1.0, -1.0] {
+                    // Delayed WIHC: rho a2 - sign (3 a1 x^2 + S_k).
+                    let mut full = vec![0.0; full_len];
+                    full[0] = -sign * 3.0 * x * x;
+                    full[1] = rho;
+                    full[2..2 + k].fill(-sign);
+                    push(
+                        full,
+                        ConstraintKind::DelayedLoopGain {
+                            compensator: DelayedCompensator::Wihc,
+                            active_operators: k,
+                            input: x,
+                            sign,
+                        },
+                        &mut rows,
+                    );
+                    // Delayed IHC: rho (a2 + S_k) - sign 3 a1 x^2.
+                    let mut full = vec![0.0; full_len];
+                    full[0] = -sign * 3.0 * x * x;
+                    full[1] = rho;
+                    full[2..2 + k].fill(rho);
+                    push(
+                        full,
+                        ConstraintKind::DelayedLoopGain {
+                            compensator: DelayedCompensator::Ihc,
+                            active_operators: k,
+                            input: x,
+                            sign,
+                        },
                         &mut rows,
                     );
                 }

@@ -86,6 +86,19 @@ impl DelayedGains {
     }
 }
 
+/// What constraining both delayed loops' gains cost ([`crate::IdentifyOptions::delayed_loop_bound`]).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct DelayedConstraint {
+    /// The bound both delayed loops' gains were held to.
+    pub bound: f64,
+    /// The RMS fit error, in % of the fitted output range, of the least-squares optimum of the
+    /// same problem without the delayed-loop rows: the fit's cost of the constraint is
+    /// [`FitReport::fit`]'s `rms_percent` minus this.
+    pub unconstrained_fit_rms_percent: f64,
+    /// Both gains of that unconstrained optimum (what the constraint brought down).
+    pub unconstrained_gains: DelayedGains,
+}
+
 /// The physical range of one signal of a record.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct SignalRange {
@@ -160,6 +173,9 @@ pub struct FitReport {
     /// (below 1: both delayed loops settle after any jump). `None` for inverse models.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub delayed_loop_gains: Option<DelayedGains>,
+    /// When both delayed loops were constrained (`--for-delayed`): the bound and what it cost.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub delayed_constraint: Option<DelayedConstraint>,
     /// The swarm's settings, when the solver was `pso`.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub pso: Option<PsoOptions>,

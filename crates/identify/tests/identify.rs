@@ -16,7 +16,7 @@ use proptest::test_runner::{Config, RngSeed};
 use rand::{Rng, RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
-use common::{VecMpim, excitation, feasible, run};
+use common::{VecMpim, excitation, feasible, random_plant, run, uniform};
 
 fn seeded(cases: u32, seed: u64) -> Config {
     Config {
@@ -25,22 +25,6 @@ fn seeded(cases: u32, seed: u64) -> Config {
         failure_persistence: None,
         ..Config::default()
     }
-}
-
-fn uniform(n: usize) -> Vec<f64> {
-    (0..n).map(|i| i as f64 / n as f64).collect()
-}
-
-/// A random plant-like model on thresholds (i - 1)/n: mostly positive weights, a small cubic.
-fn random_plant(rng: &mut impl Rng, n: usize) -> VecMpim {
-    let weights: Vec<f64> = (0..n).map(|_| rng.random_range(-0.02..0.3)).collect();
-    Mpim::new(
-        &uniform(n),
-        &weights,
-        rng.random_range(-0.15..0.15),
-        rng.random_range(0.3..1.0),
-    )
-    .unwrap()
 }
 
 /// A random model, not necessarily invertible.

@@ -167,6 +167,16 @@ pub struct FitArgs {
     /// fit is refused by default: the columns, factors or offset are probably wrong).
     #[arg(long)]
     pub accept_poor_fit: bool,
+    /// Fit a plant model meant for one-sample-delayed compensation (ihc-delayed,
+    /// wihc-delayed): both delayed loops' gains, over every number of moving operators and
+    /// every drive in the fitted range, are held to at most --delayed-loop-bound, so that
+    /// neither loop can oscillate; the report says what it costs in fit RMS. Inverse models
+    /// (DIHC) have no delayed loop and ignore it.
+    #[arg(long)]
+    pub for_delayed: bool,
+    /// With --for-delayed: the bound on both delayed loops' gains, in (0, 1).
+    #[arg(long, default_value_t = hystcomp_identify::DEFAULT_DELAYED_LOOP_BOUND, value_name = "G")]
+    pub delayed_loop_bound: f64,
     /// pso: weight of the constraint violation added to the RMS error.
     #[arg(long, default_value_t = 10.0)]
     pub penalty: f64,
@@ -183,8 +193,11 @@ model must meet two more, beyond the paper: the play-operator part a2 + b_1 + ..
 margin for every k, so that the analytic inverse of eq. (7) exists (IHC), and |3 a1 x^2 + b_1| \
 < a2 with margin over the range, so that the one-sample-delayed WIHC of eq. (9) contracts around \
 reversals; after a jump it may still ring when its full loop gain (every number of moving \
-operators) exceeds 1, which `hystcomp compensate` reports. Fits are refused when the displacement does not rise with the voltage (correlation below 0.5), \
-or when the RMS error exceeds 10 % of the output range (unless --accept-poor-fit).";
+operators) exceeds 1, which `hystcomp compensate` refuses. With --for-delayed a plant model also keeps both delayed loops' gains (every number of moving \
+operators, every drive) at most --delayed-loop-bound, so that ihc-delayed and wihc-delayed \
+cannot oscillate. Fits are refused when the displacement does not rise with the voltage \
+(correlation below 0.5), or when the RMS error exceeds 10 % of the output range (both unless \
+--accept-poor-fit).";
 
 /// Arguments of `hystcomp identify`.
 #[derive(Debug, clap::Args)]
@@ -481,6 +494,7 @@ impl FitArgs {
             } else {
                 Some(hystcomp_identify::DEFAULT_MAX_FIT_RMS_PERCENT)
             },
+            delayed_loop_bound: self.for_delayed.then_some(self.delayed_loop_bound),
             voltage_unit: columns.voltage_unit.clone(),
             displacement_unit: columns.displacement_unit.clone(),
         };
@@ -606,6 +620,20 @@ pub fn print_fit(report: &hystcomp_identify::FitReport) -> Result<(), CliError> 
             g.wihc,
             verdict(g.wihc)
         )?;
+        if let Some(c) = &report.delayed_constraint {
+            outln!(
+                "  fitted for delayed compensation (--for-delayed): both gains held to at most \
+                 {:.4}; it costs {:+.4} % of the output range in fit RMS ({:.4} % without the \
+                 bound, whose gains were ihc-delayed {:.4}, wihc-delayed {:.4})",
+                c.bound,
+                report.fit.rms_percent - c.unconstrained_fit_rms_percent,
+                c.unconstrained_fit_rms_percent,
+                c.unconstrained_gains.ihc,
+                c.unconstrained_gains.wihc
+            )?;
+        } else if g.ihc >= 1.0 || g.wihc >= 1.0 {
+            outln!("  (identify with --for-delayed to bound both delayed loops' gains below 1)")?;
+        }
     }
     Ok(())
 }

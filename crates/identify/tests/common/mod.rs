@@ -57,3 +57,20 @@ pub fn feasible(model: &VecMpim, x: &[f64], direction: Direction) -> bool {
     });
     p.smallest_slack(&theta) > 0.0
 }
+
+/// Thresholds `(i - 1) / n`, `i = 1..n`.
+pub fn uniform(n: usize) -> Vec<f64> {
+    (0..n).map(|i| i as f64 / n as f64).collect()
+}
+
+/// A random plant-like model on thresholds (i - 1)/n: mostly positive weights, a small cubic.
+pub fn random_plant(rng: &mut impl Rng, n: usize) -> VecMpim {
+    let weights: Vec<f64> = (0..n).map(|_| rng.random_range(-0.02..0.3)).collect();
+    Mpim::new(
+        &uniform(n),
+        &weights,
+        rng.random_range(-0.15..0.15),
+        rng.random_range(0.3..1.0),
+    )
+    .unwrap()
+}
