@@ -676,10 +676,25 @@ impl ModelFile {
     }
 
     /// Writes the file atomically (temporary file, then rename).
+    ///
+    /// A file larger than [`MAX_MODEL_FILE_BYTES`] (a description of many MiB) is refused
+    /// before anything is written: [`ModelFile::load`] would refuse to read it back.
     pub fn save(&self, path: &Path) -> Result<(), ModelFileError> {
         self.validate()?;
+        let text = self.to_json();
+        if text.len() as u64 > MAX_MODEL_FILE_BYTES {
+            return Err(ModelFileError::Invalid {
+                message: format!(
+                    "{}: the model file would take {:.1} MiB, more than the {} MiB a model file \
+                     may be (and be read back); shorten its description",
+                    path.display(),
+                    text.len() as f64 / f64::from(1 << 20),
+                    MAX_MODEL_FILE_BYTES >> 20
+                ),
+            });
+        }
         // The error of write_atomic already reads "could not write PATH: reason".
-        write_atomic(path, self.to_json().as_bytes()).map_err(ModelFileError::Write)
+        write_atomic(path, text.as_bytes()).map_err(ModelFileError::Write)
     }
 
     /// Runs the model over a whole record in physical units, from zero memory (eq. (1)):

@@ -425,4 +425,29 @@ fn sizes_and_scales_are_bounded() {
     file.set_len(MAX_MODEL_FILE_BYTES + 1).unwrap();
     let err = ModelFile::load(&big).unwrap_err().to_string();
     assert!(err.contains("big.json") && err.contains("16 MiB"), "{err}");
+    // Nor is such a file written: a description of 17 MiB is refused before writing, so no
+    // saved model is one that cannot be loaded back (and an old file there stays as it was).
+    let mut file = ModelFile::load(&example("table1-plant.json")).unwrap();
+    let path = dir.path().join("described.json");
+    std::fs::write(&path, "old").unwrap();
+    file.description = Some("x".repeat(17 << 20));
+    let err = file.save(&path).unwrap_err().to_string();
+    assert!(
+        err.contains("described.json") && err.contains("16 MiB") && err.contains("description"),
+        "{err}"
+    );
+    assert_eq!(std::fs::read_to_string(&path).unwrap(), "old");
+    // Just below the bound it is written and reads back.
+    let room = (MAX_MODEL_FILE_BYTES as usize) + (17 << 20) - 1 - file.to_json().len();
+    file.description = Some("x".repeat(room));
+    file.save(&path).unwrap();
+    assert_eq!(ModelFile::load(&path).unwrap(), file_with_version(file));
+}
+
+/// `file` as it reads back: written as the current format version.
+fn file_with_version(file: ModelFile) -> ModelFile {
+    ModelFile {
+        format_version: hystcomp_io::model_file::FORMAT_VERSION,
+        ..file
+    }
 }
