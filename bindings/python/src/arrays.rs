@@ -136,6 +136,50 @@ pub fn check_finite(values: &[f64], name: &str) -> PyResult<()> {
     }
 }
 
+/// The largest magnitude of a position or voltage given to a model or compensator in physical
+/// units (1e15, the bound on the values of a record read from a file,
+/// [`hystcomp_io::data::MAX_MAGNITUDE`]): beyond it a model's output scale turns the value
+/// into an infinity, or its cubic term overflows.
+pub const MAX_MAGNITUDE: f64 = hystcomp_io::data::MAX_MAGNITUDE;
+
+/// The values of `array`, refusing a NaN, an infinity or a magnitude beyond [`MAX_MAGNITUDE`],
+/// naming the first.
+pub fn record_values(array: ArrayIn<'_>, name: &str) -> PyResult<Vec<f64>> {
+    let v = finite_values(array, name)?;
+    match v.iter().position(|x| x.abs() > MAX_MAGNITUDE) {
+        None => Ok(v),
+        Some(i) => Err(beyond(&format!("{name}[{i}]"), v[i])),
+    }
+}
+
+/// Refuses a NaN, an infinity or a magnitude beyond [`MAX_MAGNITUDE`].
+pub fn check_record_scalar(value: f64, name: &str) -> PyResult<()> {
+    check_finite_scalar(value, name)?;
+    if value.abs() > MAX_MAGNITUDE {
+        return Err(beyond(name, value));
+    }
+    Ok(())
+}
+
+fn beyond(what: &str, value: f64) -> PyErr {
+    invalid(format!(
+        "{what} = {value:e} is beyond the {MAX_MAGNITUDE:e} a record's value may be; give the \
+         values in a unit that keeps them within it"
+    ))
+}
+
+/// Refuses a non-finite output of a model (its terms overflowed), naming the input's sample.
+pub fn check_outputs(outputs: &[f64], inputs: &[f64], name: &str) -> PyResult<()> {
+    match outputs.iter().position(|y| !y.is_finite()) {
+        None => Ok(()),
+        Some(i) => Err(invalid(format!(
+            "{name}[{i}] = {:e} gives a non-finite output ({}): the model's terms overflow there",
+            inputs.get(i).copied().unwrap_or(f64::NAN),
+            outputs[i]
+        ))),
+    }
+}
+
 /// Refuses a NaN or infinite scalar.
 pub fn check_finite_scalar(value: f64, name: &str) -> PyResult<()> {
     if value.is_finite() {

@@ -9,7 +9,7 @@ use hystcomp_io::model_file::{Direction, ModelFile as IoModelFile, Scale as IoSc
 use numpy::PyArray1;
 use pyo3::prelude::*;
 
-use crate::arrays::{ArrayIn, array_out, check_finite_scalar, finite_values, pair};
+use crate::arrays::{ArrayIn, array_out, check_record_scalar, pair, record_values};
 use crate::errors::{self, invalid};
 use crate::model::{ModelFile, Mpim, dict};
 
@@ -58,8 +58,8 @@ fn check_limits(limits: Option<(f64, f64)>) -> PyResult<()> {
 ///   gain over the limits is 1 or more (it can then ring between the limits after a jump); by
 ///   default that raises ``UnstableDelayError``. The ``-guarded`` methods never oscillate.
 ///
-/// Every output lies within ``limits`` and is never NaN. ``step`` and ``process`` refuse NaN or
-/// infinite desired positions with ``InvalidValueError`` (state unchanged). Raises
+/// Every output lies within ``limits`` and is never NaN. ``step`` and ``process`` refuse NaN,
+/// infinite and beyond-1e15 desired positions with ``InvalidValueError`` (state unchanged). Raises
 /// ``WrongDirectionError``, ``NotInvertibleError`` (over the limits), ``UnstableDelayError``,
 /// ``InvalidValueError``, ``ModelFileError`` or ``FileNotFoundError`` when it cannot be built.
 #[pyclass(module = "hystcomp", name = "Compensator", subclass, frozen)]
@@ -147,7 +147,7 @@ impl Compensator {
 
     /// One sample: the drive for the desired position ``y_d``.
     fn step(&self, y_d: f64) -> PyResult<f64> {
-        check_finite_scalar(y_d, "y_d")?;
+        check_record_scalar(y_d, "y_d")?;
         Ok(self.lock().step(y_d))
     }
 
@@ -158,7 +158,7 @@ impl Compensator {
         py: Python<'py>,
         y_d: ArrayIn<'py>,
     ) -> PyResult<Bound<'py, PyArray1<f64>>> {
-        let desired = finite_values(y_d, "y_d")?;
+        let desired = record_values(y_d, "y_d")?;
         // The lock is taken and released without the GIL, so that a thread waiting for the
         // GIL can never hold up one waiting for the lock.
         let control = py.detach(|| {

@@ -8,7 +8,9 @@ use numpy::PyArray1;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
-use crate::arrays::{ArrayIn, array_out, check_finite_scalar, finite_values};
+use crate::arrays::{
+    ArrayIn, array_out, check_finite_scalar, check_outputs, finite_values, record_values,
+};
 use crate::errors::{self, invalid};
 
 type VecMpim = CoreMpim<f64, Vec<f64>>;
@@ -112,15 +114,22 @@ impl Mpim {
 
     /// Feeds one input sample ``x(t)`` and returns ``y(t)``, eq. (4).
     ///
-    /// Raises ``InvalidValueError`` (memory unchanged) when ``x`` is NaN or infinite.
+    /// Raises ``InvalidValueError`` (memory unchanged) when ``x`` is NaN or infinite, or the
+    /// output overflows (e.g. the cubic term at ``x = 1e308``).
     fn step(&mut self, x: f64) -> PyResult<f64> {
         check_finite_scalar(x, "x")?;
-        Ok(self.inner.step(x))
+        // Stepped on a copy, so that an overflowing output leaves the memory unchanged.
+        let mut model = self.inner.clone();
+        let y = model.step(x);
+        check_outputs(&[y], &[x], "x")?;
+        self.inner = model;
+        Ok(y)
     }
 
     /// Runs a whole input signal from the current memory; returns the outputs.
     ///
-    /// Raises ``InvalidValueError`` (memory unchanged) when a sample is NaN or infinite.
+    /// Raises ``InvalidValueError`` (memory unchanged) when a sample is NaN or infinite, or an
+    /// output overflows (naming the sample).
     fn process<'py>(
         &mut self,
         py: Python<'py>,
@@ -128,7 +137,10 @@ impl Mpim {
     ) -> PyResult<Bound<'py, PyArray1<f64>>> {
         let x = finite_values(x, "x")?;
         let mut y = vec![0.0; x.len()];
-        self.inner.process(&x, &mut y).map_err(errors::core)?;
+        let mut model = self.inner.clone();
+        model.process(&x, &mut y).map_err(errors::core)?;
+        check_outputs(&y, &x, "x")?;
+        self.inner = model;
         Ok(array_out(py, y))
     }
 
@@ -345,14 +357,17 @@ impl ModelFile {
     }
 
     /// The model's output, in physical units, for a whole input signal in physical units
-    /// (e.g. volts in, micrometres out for a plant model), from zero memory.
+    /// (e.g. volts in, micrometres out for a plant model), from zero memory. Raises
+    /// ``InvalidValueError`` for a NaN, an infinity or a magnitude beyond 1e15 (as in a
+    /// record read from a file) and for an output that overflows, naming the sample.
     fn predict<'py>(
         &self,
         py: Python<'py>,
         inputs: ArrayIn<'py>,
     ) -> PyResult<Bound<'py, PyArray1<f64>>> {
-        let inputs = finite_values(inputs, "inputs")?;
+        let inputs = record_values(inputs, "inputs")?;
         let outputs = self.inner.predict(&inputs).map_err(errors::model_file)?;
+        check_outputs(&outputs, &inputs, "inputs")?;
         Ok(array_out(py, outputs))
     }
 

@@ -74,3 +74,45 @@ def test_a_model_file_with_a_bare_nan_says_what_it_is(tmp_path):
     path = tmp_path / "nan.json"
     path.write_text(TABLE1_FILE.read_text().replace("-0.1569", "NaN", 1))
     refused(lambda: hystcomp.ModelFile.load(path), "nan.json", "bare NaN", "json.dump")
+
+
+def test_positions_beyond_a_records_bound_are_refused_naming_the_sample(table1):
+    # A model whose output scale is below 1 turned 1e308 um into an infinity and held the
+    # previous drive (counted as non-finite, no error); the command line refuses such values
+    # when it reads a record, and so does the Python boundary.
+    half = hystcomp.ModelFile(
+        "plant",
+        table1.thresholds,
+        table1.weights,
+        table1.a1,
+        table1.a2,
+        input=table1.input,
+        output=hystcomp.Scale("displacement", "um", 0.0, 0.5),
+    )
+    for method in ["ihc", "wihc", "ihc-guarded"]:
+        c = hystcomp.Compensator(half, method)
+        before = c.process([0.1, 0.2])
+        refused(lambda: c.process([0.1, 1e308, 0.2]), "y_d[1]", "1e15")
+        refused(lambda: c.step(-2e15), "y_d", "1e15")
+        assert c.diagnostics.non_finite == 0
+        c.reset()
+        np.testing.assert_array_equal(c.process([0.1, 0.2]), before)
+    refused(lambda: table1.predict([1.0, 1e16]), "inputs[1]", "1e15")
+
+
+def test_a_model_output_that_overflows_is_refused_with_the_memory_kept():
+    m = hystcomp.Mpim.table1()
+    m.process([0.5, 0.2])
+    memory = m.memory.copy()
+    refused(lambda: m.process([0.3, 1e308]), "x[1]", "overflow")
+    refused(lambda: m.step(-1e200), "x", "overflow")
+    np.testing.assert_array_equal(m.memory, memory)
+    assert np.isfinite(m.process([1e15, -1e15])).all()
+
+
+def test_a_model_file_too_large_to_read_back_is_not_written(table1, tmp_path):
+    path = tmp_path / "described.json"
+    path.write_text("old")
+    table1.description = "x" * (17 << 20)
+    refused(lambda: table1.save(path), "described.json", "16 MiB", "description")
+    assert path.read_text() == "old"

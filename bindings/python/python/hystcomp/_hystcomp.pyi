@@ -66,11 +66,13 @@ class Mpim:
     def step(self, x: float) -> float:
         """Feeds one input sample ``x(t)`` and returns ``y(t)``, eq. (4).
 
-        Raises ``InvalidValueError`` (memory unchanged) when ``x`` is NaN or infinite."""
+        Raises ``InvalidValueError`` (memory unchanged) when ``x`` is NaN or infinite, or the
+        output overflows (e.g. the cubic term at ``x = 1e308``)."""
     def process(self, x: ArrayLike) -> FloatArray:
         """Runs a whole input signal from the current memory; returns the outputs.
 
-        Raises ``InvalidValueError`` (memory unchanged) when a sample is NaN or infinite."""
+        Raises ``InvalidValueError`` (memory unchanged) when a sample is NaN or infinite, or an
+        output overflows (naming the sample)."""
     def reset(self) -> None:
         """Back to zero memory (eq. (1))."""
     def check_invertible(self, lo: float = 0.0, hi: float = 1.0) -> float:
@@ -146,7 +148,9 @@ class ModelFile:
         """The MPIM of this file (normalised units, zero memory)."""
     def predict(self, inputs: ArrayLike) -> FloatArray:
         """The model's output, in physical units, for a whole input signal in physical units
-        (e.g. volts in, micrometres out for a plant model), from zero memory."""
+        (e.g. volts in, micrometres out for a plant model), from zero memory. Raises
+        ``InvalidValueError`` for a NaN, an infinity or a magnitude beyond 1e15 (as in a
+        record read from a file) and for an output that overflows, naming the sample."""
     @property
     def direction(self) -> str:
         """``"plant"`` or ``"inverse"``."""
@@ -197,8 +201,8 @@ class Compensator:
       gain over the limits is 1 or more (it can then ring between the limits after a jump); by
       default that raises ``UnstableDelayError``. The ``-guarded`` methods never oscillate.
 
-    Every output lies within ``limits`` and is never NaN. ``step`` and ``process`` refuse NaN or
-    infinite desired positions with ``InvalidValueError`` (state unchanged). Raises
+    Every output lies within ``limits`` and is never NaN. ``step`` and ``process`` refuse NaN,
+    infinite and beyond-1e15 desired positions with ``InvalidValueError`` (state unchanged). Raises
     ``WrongDirectionError``, ``NotInvertibleError`` (over the limits), ``UnstableDelayError``,
     ``InvalidValueError``, ``ModelFileError`` or ``FileNotFoundError`` when it cannot be built."""
 
