@@ -14,10 +14,10 @@ use crate::{Buffer, Compensator, CoreError, Diagnostics, Mpim, OutputLimits, Rea
 /// See [`Compensator`] for the output guarantees.
 #[derive(Debug, Clone)]
 pub struct Dihc<T: Real, B: Buffer<T>> {
-    model: Mpim<T, B>,
-    input_min: T,
-    input_max: T,
-    guard: OutputGuard<T>,
+    pub(crate) model: Mpim<T, B>,
+    pub(crate) input_min: T,
+    pub(crate) input_max: T,
+    pub(crate) guard: OutputGuard<T>,
 }
 
 impl<T: Real, B: Buffer<T>> Dihc<T, B> {

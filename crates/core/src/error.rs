@@ -145,6 +145,16 @@ pub enum CoreError {
         /// The longest accepted.
         maximum: usize,
     },
+    /// An array given to a bank of compensators does not hold one value per channel (per
+    /// sample, for a whole signal: a multiple of the channel count).
+    ChannelCount {
+        /// What, e.g. `"desired positions"`.
+        what: &'static str,
+        /// The bank's number of channels.
+        channels: usize,
+        /// The number of values given.
+        found: usize,
+    },
 }
 
 impl fmt::Display for CoreError {
@@ -273,6 +283,15 @@ impl fmt::Display for CoreError {
                 "a preview of {preview} samples cannot invert this vibration model: between \
                  {minimum} (its delay plus its zeros outside the unit circle) and {maximum} \
                  are needed"
+            ),
+            CoreError::ChannelCount {
+                what,
+                channels,
+                found,
+            } => write!(
+                f,
+                "{what} has {found} values, but a bank of {channels} channels needs one per \
+                 channel (a whole signal: a multiple of {channels}, sample after sample)"
             ),
         }
     }

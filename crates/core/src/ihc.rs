@@ -60,16 +60,16 @@ use crate::{
 pub struct Ihc<T: Real, B: Buffer<T>> {
     /// `P1^{-1}[w] = a2_hat w + sum b_hat_j F_{r_hat_j}[w]` of eq. (7), with its memory; its
     /// last input is the last `w`.
-    inverse: PlayBank<T, B>,
+    pub(crate) inverse: PlayBank<T, B>,
     /// The plant's input polynomial `g`; the loop uses its remainder `g(v) - a2 v`.
-    input: InputPolynomial<T>,
-    mode: SolveMode,
+    pub(crate) input: InputPolynomial<T>,
+    pub(crate) mode: SolveMode,
     /// `mu` of [`SolveMode::DelayedGuarded`], whatever the mode.
-    relaxation: T,
+    pub(crate) relaxation: T,
     /// The delayed loop's worst-case gain over the limits, whatever the mode (kept: it needs
     /// the plant's thresholds and weights, which the compensator does not keep).
-    loop_gain: LoopGain<T>,
-    guard: OutputGuard<T>,
+    pub(crate) loop_gain: LoopGain<T>,
+    pub(crate) guard: OutputGuard<T>,
 }
 
 impl<T: Real, B: Buffer<T>> Ihc<T, B> {

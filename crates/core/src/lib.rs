@@ -44,6 +44,7 @@
 #[cfg(feature = "alloc")]
 extern crate alloc;
 
+mod bank;
 mod buffer;
 mod chain;
 mod compensator;
@@ -65,6 +66,12 @@ mod vibration;
 mod walk;
 mod wihc;
 
+#[cfg(feature = "alloc")]
+pub use bank::Heap;
+pub use bank::{
+    BankError, BankStorage, CompensatorBank, DihcBank, Fixed, IhcBank, LANES, MAX_CHANNELS,
+    PLAIN_DEGREE, WihcBank, dihc_bank_rows, plant_bank_rows,
+};
 pub use buffer::{Bounded, Buffer};
 pub use chain::{ChainCompensator, ChainModel};
 pub use compensator::{Compensator, Diagnostics, OutputLimits, SolveMode};

@@ -82,33 +82,33 @@ pub(crate) struct Solution<T> {
 /// what the exact solve needs to know about its state.
 #[derive(Debug, Clone)]
 pub(crate) struct PlayBank<T: Real, B: Buffer<T>> {
-    thresholds: B,
-    weights: B,
+    pub(crate) thresholds: B,
+    pub(crate) weights: B,
     /// `prefix[k] = b_1 + ... + b_{k+1}`.
-    prefix: B,
+    pub(crate) prefix: B,
     /// `inverse_alpha[k] = 1 / (a + b_1 + ... + b_{k+1})`: the reciprocal slope of each segment.
-    inverse_alpha: B,
+    pub(crate) inverse_alpha: B,
     /// `1 / a`.
-    inverse_a: T,
-    memory: B,
-    a: T,
+    pub(crate) inverse_a: T,
+    pub(crate) memory: B,
+    pub(crate) a: T,
     /// The last input fed.
-    input: T,
+    pub(crate) input: T,
     /// `sum_i b_i w_i` of the current memory.
-    memory_sum: T,
+    pub(crate) memory_sum: T,
     /// How many operators (the first ones) moved up with the last input: `w_i = x - r_i`.
-    rising_active: usize,
+    pub(crate) rising_active: usize,
     /// How many operators (the first ones) moved down with the last input: `w_i = x`.
-    falling_active: usize,
+    pub(crate) falling_active: usize,
     /// How many operators have a zero threshold (always moving).
-    always_active: usize,
+    pub(crate) always_active: usize,
     /// Samples fed since `memory_sum` was last recomputed from the memory.
-    since_sync: u32,
+    pub(crate) since_sync: u32,
 }
 
 /// How often (in samples) [`PlayBank::feed_solved`] recomputes the memory sum from the memory
 /// instead of taking it from the solved segment, so that rounding never accumulates.
-const SYNC_INTERVAL: u32 = 64;
+pub(crate) const SYNC_INTERVAL: u32 = 64;
 
 impl<T: Real, B: Buffer<T>> PlayBank<T, B> {
     /// A bank at the reset state (zero memory, last input 0).

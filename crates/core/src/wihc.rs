@@ -74,15 +74,15 @@ use crate::{
 #[derive(Debug, Clone)]
 pub struct Wihc<T: Real, B: Buffer<T>> {
     /// `a2 v + sum b_i F_{r_i}[v]`: the plant model without its input polynomial's remainder.
-    bank: PlayBank<T, B>,
+    pub(crate) bank: PlayBank<T, B>,
     /// The plant's input polynomial `g`; `H` uses its remainder `g(v) - a2 v`.
-    input: InputPolynomial<T>,
+    pub(crate) input: InputPolynomial<T>,
     /// `1 / a2`.
-    inverse_a2: T,
-    mode: SolveMode,
+    pub(crate) inverse_a2: T,
+    pub(crate) mode: SolveMode,
     /// `lambda` of [`SolveMode::DelayedGuarded`], whatever the mode.
-    relaxation: T,
-    guard: OutputGuard<T>,
+    pub(crate) relaxation: T,
+    pub(crate) guard: OutputGuard<T>,
 }
 
 impl<T: Real, B: Buffer<T>> Wihc<T, B> {

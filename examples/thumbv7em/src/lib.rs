@@ -5,12 +5,17 @@
 //! Table 2; the `*_step` functions are the per-sample calls a control loop makes (kept as
 //! separate functions so that their code can be measured). [`RAM_BYTES`] is the RAM each
 //! compensator takes, for `n = 10` and `n = 100` operators.
+//!
+//! [`SixAxes`] is a bank of six IHC channels (a six-axis stage, issue 16) with its storage
+//! fixed at compile time ([`hystcomp_core::Fixed`]); [`BANK_RAM_BYTES`] is its RAM and that of
+//! the DIHC bank of the same size.
 #![no_std]
 
 use core::mem::size_of;
 
 use hystcomp_core::{
-    Compensator, CoreError, Dihc, Ihc, Mpim, OutputLimits, SolveMode, Wihc, paper,
+    BankError, Compensator, CompensatorBank, CoreError, Dihc, DihcBank, Fixed, Ihc, IhcBank, Mpim,
+    OutputLimits, PLAIN_DEGREE, SolveMode, Wihc, dihc_bank_rows, paper, plant_bank_rows,
 };
 
 /// Ten play operators, as in the paper.
@@ -51,6 +56,53 @@ impl Compensators {
             dihc: Dihc::new(&inverse, 0.0, 1.0, limits)?,
         })
     }
+}
+
+/// The axes of the stage the bank drives.
+pub const AXES: usize = 6;
+
+/// Channels per block of the banks: one (a Cortex-M4F has no vector unit for `f32`, so wider
+/// blocks would only pad).
+pub const BANK_LANES: usize = 1;
+
+const IHC_ROWS: [usize; 3] = plant_bank_rows(AXES, N, PLAIN_DEGREE, BANK_LANES);
+const DIHC_ROWS: [usize; 3] = dihc_bank_rows(AXES, N, PLAIN_DEGREE, BANK_LANES);
+
+/// Six IHC channels of ten operators in `f32`, storage fixed at compile time.
+pub type SixAxes =
+    IhcBank<f32, Fixed<{ IHC_ROWS[0] }, { IHC_ROWS[1] }, { IHC_ROWS[2] }>, BANK_LANES>;
+
+/// Six DIHC channels of ten operators in `f32`.
+pub type SixAxesDihc =
+    DihcBank<f32, Fixed<{ DIHC_ROWS[0] }, { DIHC_ROWS[1] }, { DIHC_ROWS[2] }>, BANK_LANES>;
+
+/// The RAM of the six-channel banks, bytes: `[IHC bank, DIHC bank]`.
+pub const BANK_RAM_BYTES: [usize; 2] = [size_of::<SixAxes>(), size_of::<SixAxesDihc>()];
+
+/// The six-axis IHC bank from Table 1 (each axis its own copy of the model), outputs in
+/// `[0, 1]`.
+pub fn six_axes() -> Result<SixAxes, BankError> {
+    let plant: Mpim<f32, [f32; N]> = paper::TABLE1.model()?;
+    let plants = [
+        plant.clone(),
+        plant.clone(),
+        plant.clone(),
+        plant.clone(),
+        plant.clone(),
+        plant,
+    ];
+    SixAxes::new(&plants, &[OutputLimits::new(0.0, 1.0)?], SolveMode::Exact)
+}
+
+/// One tick of the six-axis bank: `out[c]` for `desired[c]`.
+#[inline(never)]
+#[unsafe(no_mangle)]
+pub fn hystcomp_ihc_bank_step(
+    bank: &mut SixAxes,
+    desired: &[f32; AXES],
+    out: &mut [f32; AXES],
+) -> bool {
+    bank.step(desired, out).is_ok()
 }
 
 /// One IHC sample.

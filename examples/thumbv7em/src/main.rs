@@ -7,7 +7,8 @@ use core::panic::PanicInfo;
 use core::ptr::{addr_of_mut, write_volatile};
 
 use hystcomp_thumbv7em_example::{
-    Compensators, RAM_BYTES, desired, hystcomp_dihc_step, hystcomp_ihc_step, hystcomp_wihc_step,
+    AXES, BANK_RAM_BYTES, Compensators, RAM_BYTES, desired, hystcomp_dihc_step,
+    hystcomp_ihc_bank_step, hystcomp_ihc_step, hystcomp_wihc_step, six_axes,
 };
 
 /// The RAM table, kept in the image so that the host test can read the target's own numbers.
@@ -23,8 +24,16 @@ pub static HYSTCOMP_RAM_BYTES: [u32; 8] = {
     table
 };
 
+/// The six-channel banks' RAM, for the host test.
+#[used]
+#[unsafe(no_mangle)]
+pub static HYSTCOMP_BANK_RAM_BYTES: [u32; 2] = [BANK_RAM_BYTES[0] as u32, BANK_RAM_BYTES[1] as u32];
+
 /// Stands in for three DAC registers.
 static mut DAC: [f32; 3] = [0.0; 3];
+
+/// Stands in for the six axes' DAC registers.
+static mut AXES_DAC: [f32; AXES] = [0.0; AXES];
 
 /// The entry point (no runtime crate: the linker starts here).
 #[unsafe(no_mangle)]
@@ -32,10 +41,24 @@ pub extern "C" fn _start() -> ! {
     let Ok(mut c) = Compensators::from_paper() else {
         halt()
     };
+    let Ok(mut bank) = six_axes() else { halt() };
     let dac = addr_of_mut!(DAC).cast::<f32>();
+    let axes_dac = addr_of_mut!(AXES_DAC).cast::<f32>();
     let mut k: u32 = 0;
     loop {
         let y_d = desired(k, 2000);
+        let mut tick = [0.0f32; AXES];
+        for (c, d) in tick.iter_mut().enumerate() {
+            *d = desired(k.wrapping_add(300 * c as u32), 2000);
+        }
+        let mut drives = [0.0f32; AXES];
+        if !hystcomp_ihc_bank_step(&mut bank, &tick, &mut drives) {
+            halt()
+        }
+        for (c, v) in drives.iter().enumerate() {
+            // SAFETY: `axes_dac` points to the six floats of `AXES_DAC`, written only here.
+            unsafe { write_volatile(axes_dac.add(c), *v) };
+        }
         // SAFETY: `dac` points to the three floats of `DAC`, written only here (one thread).
         unsafe {
             write_volatile(dac, hystcomp_ihc_step(&mut c.ihc, y_d));

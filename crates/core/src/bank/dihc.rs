@@ -1,0 +1,263 @@
+//! A bank of DIHC channels (section 3.3, eq. (10)): [`crate::Dihc`] lane by lane.
+
+use super::guard::GuardLanes;
+use super::lanes::Lanes;
+use super::plant::{all_odd_cubic, cubic_lanes, polynomial_lanes, write_counters};
+use super::play::update_memory_with;
+use super::root::LaneRemainder;
+use super::run::{BlockKernel, run};
+use super::storage::{BankStorage, Block, Blocks, InverseRows, blocks};
+use super::{BankError, CompensatorBank, LANES, check_bank_size, check_tick, limits_of};
+use crate::{Buffer, CoreError, Diagnostics, Dihc, Mpim, OutputLimits, Real};
+
+type L<T, const W: usize> = Lanes<T, W>;
+
+/// DIHC for many channels at once: channel `c` is [`crate::Dihc`] built from
+/// `inverse_models[c]`, its input range and its limits, and gives the same outputs, bit for
+/// bit (see the [module documentation](super)).
+#[derive(Debug, Clone)]
+pub struct DihcBank<T: Real, S: BankStorage<T, W>, const W: usize = LANES> {
+    blocks: Blocks<T, S, W>,
+    kernel: DihcKernel,
+    channels: usize,
+}
+
+/// What every block of a DIHC bank shares.
+#[derive(Debug, Clone, Copy)]
+struct DihcKernel {
+    rows: InverseRows,
+    uniform: bool,
+    cubic: bool,
+}
+
+impl<T: Real, S: BankStorage<T, W>, const W: usize> DihcBank<T, S, W> {
+    /// A bank of one DIHC per inverse model, each valid on its input range
+    /// `input_ranges[c] = (min, max)` (one shared by all, or one per channel), with `limits`
+    /// (one pair shared by all, or one per channel). Each channel is checked as
+    /// [`crate::Dihc::new`] checks it; a refused one is named by its index.
+    pub fn new<B: Buffer<T>>(
+        inverse_models: &[Mpim<T, B>],
+        input_ranges: &[(T, T)],
+        limits: &[OutputLimits<T>],
+    ) -> Result<Self, BankError> {
+        let channels = inverse_models.len();
+        check_bank_size(channels, limits.len())?;
+        check_bank_size(channels, input_ranges.len()).map_err(|_| {
+            BankError::Bank(CoreError::ChannelCount {
+                what: "input ranges (one for every channel, or one for each)",
+                channels,
+                found: input_ranges.len(),
+            })
+        })?;
+        let n = inverse_models.iter().map(Mpim::len).max().unwrap_or(0);
+        let degree = inverse_models
+            .iter()
+            .map(|p| p.input_polynomial().degree())
+            .fold(super::PLAIN_DEGREE, usize::max);
+        let rows = InverseRows::new(n, degree);
+        let count = blocks(channels, W);
+        let mut storage = Blocks::<T, S, W>::new(count, rows.values, InverseRows::COUNTS)
+            .map_err(BankError::Bank)?;
+        for (channel, model) in inverse_models.iter().enumerate() {
+            let (lo, hi) = input_ranges
+                .get(channel)
+                .or_else(|| input_ranges.first())
+                .copied()
+                .unwrap_or((T::zero(), T::one()));
+            let dihc = Dihc::<T, B>::new(model, lo, hi, limits_of(limits, channel)?)
+                .map_err(|error| BankError::Channel { channel, error })?;
+            let lanes = if channel + 1 == channels {
+                channel..count * W
+            } else {
+                channel..channel + 1
+            };
+            for lane in lanes {
+                write_dihc_lane(&mut storage, &rows, lane, &dihc);
+            }
+        }
+        Ok(DihcBank {
+            blocks: storage,
+            kernel: DihcKernel {
+                rows,
+                uniform: inverse_models.iter().all(|p| p.len() == n),
+                cubic: inverse_models
+                    .iter()
+                    .all(|p| p.input_polynomial().is_odd_cubic()),
+            },
+            channels,
+        })
+    }
+
+    /// The input range `(min, max)` of desired positions `channel` accepts.
+    pub fn input_range(&self, channel: usize) -> Option<(T, T)> {
+        let rows = &self.kernel.rows;
+        (channel < self.channels).then(|| {
+            (
+                self.blocks
+                    .value(channel, rows.scalar(InverseRows::INPUT_MIN)),
+                self.blocks
+                    .value(channel, rows.scalar(InverseRows::INPUT_MAX)),
+            )
+        })
+    }
+}
+
+/// Writes one single-channel DIHC into lane `lane`.
+fn write_dihc_lane<T: Real, S: BankStorage<T, W>, B: Buffer<T>, const W: usize>(
+    blocks: &mut Blocks<T, S, W>,
+    rows: &InverseRows,
+    lane: usize,
+    dihc: &Dihc<T, B>,
+) {
+    let model = &dihc.model;
+    let operator_rows = [
+        (rows.thresholds(), model.thresholds()),
+        (rows.weights(), model.weights()),
+        (rows.memory(), model.memory()),
+    ];
+    for (first, values) in operator_rows {
+        for i in 0..rows.n {
+            let value = values.get(i).copied().unwrap_or(T::zero());
+            blocks.set_value(lane, first + i, value);
+        }
+    }
+    let scalars = [
+        (InverseRows::INPUT_MIN, dihc.input_min),
+        (InverseRows::INPUT_MAX, dihc.input_max),
+        (InverseRows::LIMIT_MIN, dihc.guard.limits.min()),
+        (InverseRows::LIMIT_MAX, dihc.guard.limits.max()),
+        (InverseRows::PREVIOUS, dihc.guard.previous),
+    ];
+    for (which, value) in scalars {
+        blocks.set_value(lane, rows.scalar(which), value);
+    }
+    let input = model.input_polynomial();
+    for j in 0..rows.degree {
+        let c = input.coefficients().get(j).copied().unwrap_or(T::zero());
+        blocks.set_value(lane, rows.coefficient(j), c);
+    }
+    let counts = [
+        (InverseRows::OPERATORS, model.len()),
+        (InverseRows::DEGREE, input.degree()),
+        (InverseRows::ODD_CUBIC, usize::from(input.is_odd_cubic())),
+    ];
+    for (row, value) in counts {
+        blocks.set_count(lane, row, u32::try_from(value).unwrap_or(u32::MAX));
+    }
+    write_counters(blocks, lane, &dihc.guard);
+}
+
+impl<T: Real, S: BankStorage<T, W>, const W: usize> CompensatorBank<T> for DihcBank<T, S, W> {
+    fn channels(&self) -> usize {
+        self.channels
+    }
+
+    fn reset(&mut self) {
+        for mut block in self.blocks.blocks_mut() {
+            self.kernel.reset(&mut block);
+        }
+    }
+
+    #[inline]
+    fn step(&mut self, desired: &[T], control: &mut [T]) -> Result<(), CoreError> {
+        check_tick(self.channels, desired.len(), control.len())?;
+        run(&self.kernel, self.blocks.blocks_mut(), desired, control);
+        Ok(())
+    }
+
+    fn limits(&self, channel: usize) -> Option<OutputLimits<T>> {
+        if channel >= self.channels {
+            return None;
+        }
+        let rows = &self.kernel.rows;
+        let min = self
+            .blocks
+            .value(channel, rows.scalar(InverseRows::LIMIT_MIN));
+        let max = self
+            .blocks
+            .value(channel, rows.scalar(InverseRows::LIMIT_MAX));
+        OutputLimits::new(min, max).ok()
+    }
+
+    fn diagnostics(&self, channel: usize) -> Option<Diagnostics> {
+        super::diagnostics_of(&self.blocks, channel, self.channels)
+    }
+}
+
+impl DihcKernel {
+    fn guard<T: Real, const W: usize>(&self, block: &Block<'_, T, W>) -> GuardLanes<T, W> {
+        let rows = &self.rows;
+        GuardLanes::load(
+            block,
+            rows.scalar(InverseRows::LIMIT_MIN),
+            rows.scalar(InverseRows::LIMIT_MAX),
+            rows.scalar(InverseRows::PREVIOUS),
+        )
+    }
+
+    /// One sample of every lane (`Dihc::step`): the desired position clamped into the input
+    /// range, eq. (10), the output guard.
+    #[inline(always)]
+    fn step_with<T: Real, R: LaneRemainder<T, W>, const W: usize>(
+        &self,
+        block: &mut Block<'_, T, W>,
+        desired: L<T, W>,
+        remainder: R,
+    ) -> L<T, W> {
+        let rows = &self.rows;
+        let mut guard = self.guard(block);
+        let active = guard.accept(desired);
+        let input_min = block.get(rows.scalar(InverseRows::INPUT_MIN));
+        let input_max = block.get(rows.scalar(InverseRows::INPUT_MAX));
+        let x = desired.max(input_min).min(input_max);
+        // Mpim::step: g(x) + sum b_i F_{r_i}[x].
+        let g = remainder.input_function(x, block.get(rows.coefficient(0)));
+        let fed = update_memory_with(
+            block,
+            rows.thresholds(),
+            rows.weights(),
+            rows.memory(),
+            rows.n,
+            block.count(InverseRows::OPERATORS),
+            x,
+            active,
+            false,
+            true,
+            self.uniform,
+        );
+        let v = g + fed.sum;
+        let out = guard.emit(v, x.compare(desired, |a, b| a != b), active);
+        guard.store(block, rows.scalar(InverseRows::PREVIOUS));
+        out
+    }
+
+    /// `Dihc::reset` for every lane of a block.
+    fn reset<T: Real, const W: usize>(&self, block: &mut Block<'_, T, W>) {
+        let mut guard = self.guard(block);
+        for i in 0..self.rows.n {
+            block.set(self.rows.memory() + i, Lanes::zero());
+        }
+        guard.reset();
+        guard.store(block, self.rows.scalar(InverseRows::PREVIOUS));
+    }
+}
+
+impl<T: Real, const W: usize> BlockKernel<T, W> for DihcKernel {
+    #[inline(always)]
+    fn step(&self, block: &mut Block<'_, T, W>, desired: L<T, W>) -> L<T, W> {
+        let first = self.rows.coefficient(0);
+        if self.cubic || all_odd_cubic(block, InverseRows::ODD_CUBIC) {
+            let remainder = cubic_lanes(block, first);
+            self.step_with(block, desired, remainder)
+        } else {
+            let remainder = polynomial_lanes(
+                block,
+                first,
+                self.rows.degree,
+                InverseRows::DEGREE,
+                InverseRows::ODD_CUBIC,
+            );
+            self.step_with(block, desired, remainder)
+        }
+    }
+}

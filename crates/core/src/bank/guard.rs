@@ -1,0 +1,115 @@
+//! The output guard (`crate::compensator::OutputGuard`) of every lane of a block: limits, the
+//! previous output, the counters. The safety invariant (every output within its lane's limits,
+//! never NaN) is enforced here, lane by lane, exactly as for one channel.
+
+use super::lanes::{Lanes, Mask};
+use super::storage::{Block, LOOP_SATURATED, NON_FINITE, SATURATED};
+use crate::Real;
+
+type L<T, const W: usize> = Lanes<T, W>;
+
+/// The guard's state, loaded from a block's rows.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct GuardLanes<T, const W: usize> {
+    pub min: L<T, W>,
+    pub max: L<T, W>,
+    pub previous: L<T, W>,
+    pub saturated: Lanes<u64, W>,
+    pub loop_saturated: Lanes<u64, W>,
+    pub non_finite: Lanes<u64, W>,
+}
+
+impl<T: Real, const W: usize> GuardLanes<T, W> {
+    /// The guard with its limits, previous output and counters in rows `min`, `max` and
+    /// `previous` of `block`.
+    #[inline(always)]
+    pub fn load(block: &Block<'_, T, W>, min: usize, max: usize, previous: usize) -> Self {
+        GuardLanes {
+            min: block.get(min),
+            max: block.get(max),
+            previous: block.get(previous),
+            saturated: block.counter(SATURATED),
+            loop_saturated: block.counter(LOOP_SATURATED),
+            non_finite: block.counter(NON_FINITE),
+        }
+    }
+
+    #[inline(always)]
+    pub fn store(&self, block: &mut Block<'_, T, W>, previous: usize) {
+        block.set(previous, self.previous);
+        block.set_counter(SATURATED, self.saturated);
+        block.set_counter(LOOP_SATURATED, self.loop_saturated);
+        block.set_counter(NON_FINITE, self.non_finite);
+    }
+
+    /// The reset state: previous output 0 clamped into the limits, counters cleared.
+    #[inline(always)]
+    pub fn reset(&mut self) {
+        let zero = Lanes::zero();
+        self.previous = self.clamp_or(zero, zero);
+        self.saturated = Lanes::splat(0);
+        self.loop_saturated = Lanes::splat(0);
+        self.non_finite = Lanes::splat(0);
+    }
+
+    /// `OutputGuard::accept`: the lanes whose desired position is finite; the others are
+    /// counted (their output is the previous one).
+    #[inline(always)]
+    pub fn accept(&mut self, desired: L<T, W>) -> Mask<W> {
+        let finite = desired.is_finite();
+        self.non_finite = self.non_finite + (!finite).count();
+        finite
+    }
+
+    /// `OutputLimits::clamp_or` lane by lane.
+    #[inline(always)]
+    pub fn clamp_or(&self, value: L<T, W>, fallback: L<T, W>) -> L<T, W> {
+        let value = fallback.or_keep(value.is_nan(), value);
+        L::select(
+            value.lt(self.min),
+            self.min,
+            L::select(
+                value.gt(self.max),
+                self.max,
+                self.min.or_keep(value.is_nan(), value),
+            ),
+        )
+    }
+
+    /// The clamped output of `value` and whether the sample counts as clamped
+    /// (`OutputGuard::emit_classified`'s condition: `limited`, a non-finite value, or a clamp
+    /// beyond rounding).
+    #[inline(always)]
+    pub fn clamp(&self, value: L<T, W>, limited: Mask<W>) -> (L<T, W>, Mask<W>) {
+        let out = self.clamp_or(value, self.previous);
+        let rounding = Lanes::splat(T::epsilon() * T::from_f64(64.0))
+            * value.abs().max(Lanes::splat(T::one()));
+        let clamped = limited | !value.is_finite() | (out - value).abs().gt(rounding);
+        (out, clamped)
+    }
+
+    /// Records the outputs of the lanes of `active`, counting their clamped samples as loop
+    /// saturations where `reachable` is set and as saturations elsewhere.
+    #[inline(always)]
+    pub fn record(
+        &mut self,
+        out: L<T, W>,
+        clamped: Mask<W>,
+        reachable: Mask<W>,
+        active: Mask<W>,
+    ) -> L<T, W> {
+        let counted = clamped & active;
+        self.loop_saturated = self.loop_saturated + (counted & reachable).count();
+        self.saturated = self.saturated + counted.and_not(reachable).count();
+        self.previous = out.or_keep(active, self.previous);
+        self.previous
+    }
+
+    /// `OutputGuard::emit` for the lanes of `active`: clamps, counts, records. Returns every
+    /// lane's output (the previous one for the lanes not active).
+    #[inline(always)]
+    pub fn emit(&mut self, value: L<T, W>, limited: Mask<W>, active: Mask<W>) -> L<T, W> {
+        let (out, clamped) = self.clamp(value, limited);
+        self.record(out, clamped, Mask::splat(false), active)
+    }
+}

@@ -1,0 +1,372 @@
+//! A bank of IHC channels (section 3.1, eqs. (5)-(8)): [`crate::Ihc`] lane by lane.
+
+use super::guard::GuardLanes;
+use super::lanes::{Lanes, Mask};
+use super::plant::{all_odd_cubic, cubic_lanes, polynomial_lanes, write_lane};
+use super::play::{LaneEquation, PlayState, feed, feed_solved, solve};
+use super::root::{LaneRemainder, increasing_root};
+use super::run::{BlockKernel, run};
+use super::storage::{BankStorage, Block, Blocks, PlantRows, blocks};
+use super::{BankError, CompensatorBank, LANES, check_bank_size, check_tick, limits_of};
+use crate::{Buffer, CoreError, Diagnostics, Ihc, Mpim, OutputLimits, Real, SolveMode};
+
+type L<T, const W: usize> = Lanes<T, W>;
+
+/// IHC for many channels at once: channel `c` is [`crate::Ihc`] built from `plants[c]` with
+/// its limits and the bank's solve mode, and gives the same outputs, bit for bit (see the
+/// [module documentation](super)).
+///
+/// ```
+/// use hystcomp_core::{CompensatorBank, Heap, IhcBank, OutputLimits, SolveMode, paper};
+///
+/// let plants = [paper::TABLE1.model::<f64, Vec<f64>>()?, paper::TABLE1.spread(20)?];
+/// let limits = [OutputLimits::new(0.0, 1.0)?];
+/// let mut bank: IhcBank<f64, Heap> = IhcBank::new(&plants, &limits, SolveMode::Exact)?;
+/// let mut control = [0.0; 2];
+/// bank.step(&[0.3, 0.5], &mut control)?;
+/// # Ok::<(), Box<dyn std::error::Error>>(())
+/// ```
+#[derive(Debug, Clone)]
+pub struct IhcBank<T: Real, S: BankStorage<T, W>, const W: usize = LANES> {
+    blocks: Blocks<T, S, W>,
+    kernel: IhcKernel,
+    channels: usize,
+}
+
+/// What every block of an IHC bank shares.
+#[derive(Debug, Clone, Copy)]
+struct IhcKernel {
+    rows: PlantRows,
+    mode: SolveMode,
+    /// Every channel has `rows.n` operators.
+    uniform: bool,
+    /// Every channel has the paper's odd cubic.
+    cubic: bool,
+}
+
+impl<T: Real, S: BankStorage<T, W>, const W: usize> IhcBank<T, S, W> {
+    /// A bank of one IHC per plant model, with `limits` for every channel (one pair shared by
+    /// all, or one per channel) and one solve mode for all. Each channel is checked as
+    /// [`crate::Ihc::new`] checks it; a refused one is named by its index.
+    pub fn new<B: Buffer<T>>(
+        plants: &[Mpim<T, B>],
+        limits: &[OutputLimits<T>],
+        mode: SolveMode,
+    ) -> Result<Self, BankError> {
+        check_bank_size(plants.len(), limits.len())?;
+        let n = plants.iter().map(Mpim::len).max().unwrap_or(0);
+        let degree = plants
+            .iter()
+            .map(|p| p.input_polynomial().degree())
+            .fold(super::PLAIN_DEGREE, usize::max);
+        let rows = PlantRows::new(n, degree);
+        let count = blocks(plants.len(), W);
+        let mut storage = Blocks::<T, S, W>::new(count, rows.values, PlantRows::COUNTS)
+            .map_err(BankError::Bank)?;
+        for (channel, plant) in plants.iter().enumerate() {
+            let ihc = Ihc::<T, B>::new(plant, limits_of(limits, channel)?, mode)
+                .map_err(|error| BankError::Channel { channel, error })?;
+            // The padding lanes after the last channel copy it (they are fed NaN: held).
+            let lanes = if channel + 1 == plants.len() {
+                channel..count * W
+            } else {
+                channel..channel + 1
+            };
+            for lane in lanes {
+                write_lane(
+                    &mut storage,
+                    &rows,
+                    lane,
+                    &ihc.inverse,
+                    &ihc.input,
+                    ihc.relaxation,
+                    &ihc.guard,
+                );
+            }
+        }
+        Ok(IhcBank {
+            blocks: storage,
+            kernel: IhcKernel {
+                rows,
+                mode,
+                uniform: plants.iter().all(|p| p.len() == n),
+                cubic: plants.iter().all(|p| p.input_polynomial().is_odd_cubic()),
+            },
+            channels: plants.len(),
+        })
+    }
+
+    /// The solve mode of every channel.
+    pub fn mode(&self) -> SolveMode {
+        self.kernel.mode
+    }
+
+    /// The under-relaxation `mu` of [`SolveMode::DelayedGuarded`] of `channel` (see
+    /// [`crate::Ihc::guard_relaxation`]).
+    pub fn guard_relaxation(&self, channel: usize) -> Option<T> {
+        (channel < self.channels).then(|| {
+            self.blocks
+                .value(channel, self.kernel.rows.scalar(PlantRows::RELAXATION))
+        })
+    }
+}
+
+impl<T: Real, S: BankStorage<T, W>, const W: usize> CompensatorBank<T> for IhcBank<T, S, W> {
+    fn channels(&self) -> usize {
+        self.channels
+    }
+
+    fn reset(&mut self) {
+        for mut block in self.blocks.blocks_mut() {
+            self.kernel.reset(&mut block);
+        }
+    }
+
+    #[inline]
+    fn step(&mut self, desired: &[T], control: &mut [T]) -> Result<(), CoreError> {
+        check_tick(self.channels, desired.len(), control.len())?;
+        run(&self.kernel, self.blocks.blocks_mut(), desired, control);
+        Ok(())
+    }
+
+    fn limits(&self, channel: usize) -> Option<OutputLimits<T>> {
+        plant_limits(&self.blocks, &self.kernel.rows, channel, self.channels)
+    }
+
+    fn diagnostics(&self, channel: usize) -> Option<Diagnostics> {
+        super::diagnostics_of(&self.blocks, channel, self.channels)
+    }
+}
+
+/// The limits of `channel` of an IHC or WIHC bank.
+pub(crate) fn plant_limits<T: Real, S: BankStorage<T, W>, const W: usize>(
+    blocks: &Blocks<T, S, W>,
+    rows: &PlantRows,
+    channel: usize,
+    channels: usize,
+) -> Option<OutputLimits<T>> {
+    if channel >= channels {
+        return None;
+    }
+    let min = blocks.value(channel, rows.scalar(PlantRows::LIMIT_MIN));
+    let max = blocks.value(channel, rows.scalar(PlantRows::LIMIT_MAX));
+    OutputLimits::new(min, max).ok()
+}
+
+/// Exact IHC on one segment of every lane (`crate::ihc::Eq5Exact`):
+/// `w + h(alpha w + beta) = y_d`.
+struct Eq5Exact<T, R, const W: usize> {
+    remainder: R,
+    desired: L<T, W>,
+}
+
+impl<T: Real, R: LaneRemainder<T, W>, const W: usize> LaneEquation<T, W> for Eq5Exact<T, R, W> {
+    #[inline(always)]
+    fn residual(&self, w: L<T, W>, alpha: L<T, W>, beta: L<T, W>) -> L<T, W> {
+        let v = alpha * w + beta;
+        w + self.remainder.value(v) - self.desired
+    }
+    #[inline(always)]
+    fn rounding(&self, w: L<T, W>, alpha: L<T, W>, beta: L<T, W>) -> L<T, W> {
+        let v = alpha * w + beta;
+        let terms = w.abs() + self.remainder.size(v) + self.desired.abs();
+        rounding_tolerance(terms)
+    }
+    #[inline(always)]
+    fn root(
+        &self,
+        lo: L<T, W>,
+        hi: L<T, W>,
+        f_lo: L<T, W>,
+        f_hi: L<T, W>,
+        alpha: L<T, W>,
+        beta: L<T, W>,
+        inv_alpha: L<T, W>,
+        active: Mask<W>,
+    ) -> L<T, W> {
+        let v = increasing_root(
+            self.remainder,
+            inv_alpha,
+            -beta * inv_alpha - self.desired,
+            alpha * lo + beta,
+            alpha * hi + beta,
+            f_lo,
+            f_hi,
+            active,
+        );
+        ((v - beta) * inv_alpha).max(lo).min(hi)
+    }
+}
+
+/// `crate::walk::rounding_tolerance` lane by lane: `256 eps (1 + terms)`.
+#[inline(always)]
+pub(crate) fn rounding_tolerance<T: Real, const W: usize>(terms: L<T, W>) -> L<T, W> {
+    Lanes::splat(T::epsilon() * T::from_f64(256.0)) * (Lanes::splat(T::one()) + terms)
+}
+
+/// Delayed IHC on one segment (`crate::ihc::Eq5Delayed`): `w` is known.
+struct Eq5Delayed<T, const W: usize> {
+    w: L<T, W>,
+}
+
+impl<T: Real, const W: usize> LaneEquation<T, W> for Eq5Delayed<T, W> {
+    #[inline(always)]
+    fn residual(&self, w: L<T, W>, _alpha: L<T, W>, _beta: L<T, W>) -> L<T, W> {
+        w - self.w
+    }
+    #[inline(always)]
+    fn root(
+        &self,
+        lo: L<T, W>,
+        hi: L<T, W>,
+        _f_lo: L<T, W>,
+        _f_hi: L<T, W>,
+        _alpha: L<T, W>,
+        _beta: L<T, W>,
+        _inv: L<T, W>,
+        _active: Mask<W>,
+    ) -> L<T, W> {
+        self.w.max(lo).min(hi)
+    }
+}
+
+/// The `w` where `P1^{-1}[w] = control` (`crate::ihc::ReachControl`), to start at a limit.
+struct ReachControl<T, const W: usize> {
+    control: L<T, W>,
+}
+
+impl<T: Real, const W: usize> LaneEquation<T, W> for ReachControl<T, W> {
+    #[inline(always)]
+    fn residual(&self, w: L<T, W>, alpha: L<T, W>, beta: L<T, W>) -> L<T, W> {
+        alpha * w + beta - self.control
+    }
+    #[inline(always)]
+    fn root(
+        &self,
+        lo: L<T, W>,
+        hi: L<T, W>,
+        _f_lo: L<T, W>,
+        _f_hi: L<T, W>,
+        _alpha: L<T, W>,
+        beta: L<T, W>,
+        inv_alpha: L<T, W>,
+        _active: Mask<W>,
+    ) -> L<T, W> {
+        ((self.control - beta) * inv_alpha).max(lo).min(hi)
+    }
+}
+
+impl IhcKernel {
+    /// One sample of every lane with the remainder `h` (`crate::ihc::ihc_step`).
+    #[inline(always)]
+    fn step_with<T: Real, R: LaneRemainder<T, W>, const W: usize>(
+        &self,
+        block: &mut Block<'_, T, W>,
+        desired: L<T, W>,
+        remainder: R,
+    ) -> L<T, W> {
+        let rows = &self.rows;
+        let mut guard = GuardLanes::load(
+            block,
+            rows.scalar(PlantRows::LIMIT_MIN),
+            rows.scalar(PlantRows::LIMIT_MAX),
+            rows.scalar(PlantRows::PREVIOUS),
+        );
+        let mut state = PlayState::load(block, rows);
+        let active = guard.accept(desired);
+        let v_prev = guard.previous;
+        let w_prev = state.input;
+        let h_prev = remainder.value(v_prev);
+        let exact = Eq5Exact { remainder, desired };
+        let f_exact = w_prev + h_prev - desired;
+        let out = if self.mode == SolveMode::Exact {
+            let solution = solve(
+                block, rows, &state, &exact, f_exact, guard.min, guard.max, active,
+            );
+            let v = feed_solved(block, rows, &mut state, &solution, active, self.uniform);
+            guard.emit(v, solution.saturated, active)
+        } else {
+            // w(t) = y_d(t) - h(v(t - Ts)); guarded, w(t - Ts) + mu (y_d - w(t - Ts) - h(v(t - Ts))).
+            let relaxation = block.get(rows.scalar(PlantRows::RELAXATION));
+            let guarded = if self.mode == SolveMode::DelayedGuarded {
+                relaxation.lt(Lanes::splat(T::one()))
+            } else {
+                Mask::splat(false)
+            };
+            let w = (w_prev - relaxation * f_exact).or_keep(guarded, desired - h_prev);
+            let delayed = Eq5Delayed { w };
+            let solution = solve(
+                block,
+                rows,
+                &state,
+                &delayed,
+                w_prev - w,
+                guard.min,
+                guard.max,
+                active,
+            );
+            // A clamped sample: was y_d reachable? The exact solve from the same state says.
+            let check = solution.saturated & active;
+            let mut reachable = Mask::splat(false);
+            if check.any() {
+                let e = solve(
+                    block, rows, &state, &exact, f_exact, guard.min, guard.max, check,
+                );
+                reachable = check.and_not(e.saturated);
+            }
+            let v = feed_solved(block, rows, &mut state, &solution, active, self.uniform);
+            let (out, clamped) = guard.clamp(v, solution.saturated);
+            guard.record(out, clamped, reachable, active)
+        };
+        state.store(block, rows);
+        guard.store(block, rows.scalar(PlantRows::PREVIOUS));
+        out
+    }
+
+    /// `Ihc::reset` for every lane of a block.
+    fn reset<T: Real, const W: usize>(&self, block: &mut Block<'_, T, W>) {
+        let rows = &self.rows;
+        let mut guard = GuardLanes::load(
+            block,
+            rows.scalar(PlantRows::LIMIT_MIN),
+            rows.scalar(PlantRows::LIMIT_MAX),
+            rows.scalar(PlantRows::PREVIOUS),
+        );
+        let mut state = PlayState::load(block, rows);
+        super::play::reset(block, rows, &mut state);
+        guard.reset();
+        // 0 outside the limits: start from the nearest limit, feeding the w that P1^{-1} maps
+        // to it.
+        let v0 = guard.previous;
+        let away = v0.compare(Lanes::zero(), |a, b| a != b);
+        if away.any() {
+            let equation = ReachControl { control: v0 };
+            let s = solve(
+                block, rows, &state, &equation, -v0, guard.min, guard.max, away,
+            );
+            feed(block, rows, &mut state, s.input, away, self.uniform);
+        }
+        state.store(block, rows);
+        guard.store(block, rows.scalar(PlantRows::PREVIOUS));
+    }
+}
+
+impl<T: Real, const W: usize> BlockKernel<T, W> for IhcKernel {
+    #[inline(always)]
+    fn step(&self, block: &mut Block<'_, T, W>, desired: L<T, W>) -> L<T, W> {
+        let first = self.rows.coefficient(0);
+        if self.cubic || all_odd_cubic(block, PlantRows::ODD_CUBIC) {
+            let remainder = cubic_lanes(block, first);
+            self.step_with(block, desired, remainder)
+        } else {
+            let remainder = polynomial_lanes(
+                block,
+                first,
+                self.rows.degree,
+                PlantRows::DEGREE,
+                PlantRows::ODD_CUBIC,
+            );
+            self.step_with(block, desired, remainder)
+        }
+    }
+}

@@ -1,0 +1,238 @@
+//! `W` values side by side, one per channel of a block, and the masks that stand in for the
+//! single-channel code's branches.
+//!
+//! Every operation is the scalar operation applied lane by lane, written as a loop over a fixed
+//! number of lanes with no branch inside, so that the compiler turns it into vector
+//! instructions (and, on a target without them, into the scalar code it replaces). A branch of
+//! the single-channel compensator becomes a [`Mask`] and a [`Lanes::select`]: each lane
+//! computes exactly the operations its single-channel twin computes, in the same order, so its
+//! results are the same bits.
+
+// Lane loops index every array by the lane, the form the compiler vectorises (each lane the same
+// operation): clearer here than zipped iterators.
+#![allow(clippy::needless_range_loop)]
+
+use core::ops::{Add, BitAnd, BitOr, Div, Mul, Neg, Not, Sub};
+
+use crate::Real;
+
+/// One value per lane.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) struct Lanes<T, const W: usize>(pub [T; W]);
+
+/// One flag per lane: the vector form of a condition.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) struct Mask<const W: usize>(pub [bool; W]);
+
+impl<T: Copy, const W: usize> Lanes<T, W> {
+    /// The same value in every lane.
+    #[inline(always)]
+    pub fn splat(value: T) -> Self {
+        Lanes([value; W])
+    }
+
+    /// `f(a, b)` lane by lane.
+    #[inline(always)]
+    pub fn zip<U: Copy, V: Copy>(self, other: Lanes<U, W>, f: impl Fn(T, U) -> V) -> Lanes<V, W> {
+        Lanes(core::array::from_fn(|l| f(self.0[l], other.0[l])))
+    }
+
+    /// `f(a)` lane by lane.
+    #[inline(always)]
+    pub fn map<V: Copy>(self, f: impl Fn(T) -> V) -> Lanes<V, W> {
+        Lanes(core::array::from_fn(|l| f(self.0[l])))
+    }
+
+    /// `f(a)` lane by lane, as a mask.
+    #[inline(always)]
+    pub fn test(self, f: impl Fn(T) -> bool) -> Mask<W> {
+        let mut out = [false; W];
+        for l in 0..W {
+            out[l] = f(self.0[l]);
+        }
+        Mask(out)
+    }
+
+    /// `f(a, b)` lane by lane, as a mask.
+    #[inline(always)]
+    pub fn compare(self, other: Self, f: impl Fn(T, T) -> bool) -> Mask<W> {
+        let mut out = [false; W];
+        for l in 0..W {
+            out[l] = f(self.0[l], other.0[l]);
+        }
+        Mask(out)
+    }
+
+    /// `if mask { yes } else { no }` lane by lane.
+    #[inline(always)]
+    pub fn select(mask: Mask<W>, yes: Self, no: Self) -> Self {
+        let mut out = no.0;
+        for l in 0..W {
+            out[l] = if mask.0[l] { yes.0[l] } else { no.0[l] };
+        }
+        Lanes(out)
+    }
+
+    /// `self` where `mask` is set, `no` elsewhere.
+    #[inline(always)]
+    pub fn or_keep(self, mask: Mask<W>, no: Self) -> Self {
+        Self::select(mask, self, no)
+    }
+}
+
+impl<T: Real, const W: usize> Lanes<T, W> {
+    #[inline(always)]
+    pub fn zero() -> Self {
+        Self::splat(T::zero())
+    }
+
+    #[inline(always)]
+    pub fn max(self, other: Self) -> Self {
+        self.zip(other, |a, b| a.max(b))
+    }
+
+    #[inline(always)]
+    pub fn min(self, other: Self) -> Self {
+        self.zip(other, |a, b| a.min(b))
+    }
+
+    #[inline(always)]
+    pub fn abs(self) -> Self {
+        self.map(|a| a.abs())
+    }
+
+    #[inline(always)]
+    pub fn lt(self, other: Self) -> Mask<W> {
+        self.compare(other, |a, b| a < b)
+    }
+
+    #[inline(always)]
+    pub fn le(self, other: Self) -> Mask<W> {
+        self.compare(other, |a, b| a <= b)
+    }
+
+    #[inline(always)]
+    pub fn gt(self, other: Self) -> Mask<W> {
+        self.compare(other, |a, b| a > b)
+    }
+
+    #[inline(always)]
+    pub fn ge(self, other: Self) -> Mask<W> {
+        self.compare(other, |a, b| a >= b)
+    }
+
+    #[inline(always)]
+    pub fn is_finite(self) -> Mask<W> {
+        self.test(|a| a.is_finite())
+    }
+
+    #[inline(always)]
+    pub fn is_nan(self) -> Mask<W> {
+        self.test(|a| a.is_nan())
+    }
+}
+
+macro_rules! lane_operator {
+    ($trait:ident, $method:ident, $op:tt) => {
+        impl<T: Copy + $trait<Output = T>, const W: usize> $trait for Lanes<T, W> {
+            type Output = Self;
+            #[inline(always)]
+            fn $method(self, other: Self) -> Self {
+                self.zip(other, |a, b| a $op b)
+            }
+        }
+    };
+}
+
+lane_operator!(Add, add, +);
+lane_operator!(Sub, sub, -);
+lane_operator!(Mul, mul, *);
+lane_operator!(Div, div, /);
+
+impl<T: Copy + Neg<Output = T>, const W: usize> Neg for Lanes<T, W> {
+    type Output = Self;
+    #[inline(always)]
+    fn neg(self) -> Self {
+        self.map(|a| -a)
+    }
+}
+
+impl<const W: usize> Mask<W> {
+    /// Every lane set to `value`.
+    #[inline(always)]
+    pub fn splat(value: bool) -> Self {
+        Mask([value; W])
+    }
+
+    /// Whether any lane is set (no early exit, so that it vectorises).
+    #[inline(always)]
+    pub fn any(self) -> bool {
+        self.0.iter().fold(false, |a, &b| a | b)
+    }
+
+    /// Whether every lane is set.
+    #[inline(always)]
+    pub fn all(self) -> bool {
+        self.0.iter().fold(true, |a, &b| a & b)
+    }
+
+    /// `if choose { yes } else { no }` lane by lane.
+    #[inline(always)]
+    pub fn choose(choose: Self, yes: Self, no: Self) -> Self {
+        (choose & yes) | (!choose & no)
+    }
+
+    /// `self && !other` lane by lane.
+    #[inline(always)]
+    pub fn and_not(self, other: Self) -> Self {
+        self & !other
+    }
+
+    /// 1 where set, 0 elsewhere.
+    #[inline(always)]
+    pub fn count(self) -> Lanes<u64, W> {
+        Lanes(self.0).map(u64::from)
+    }
+
+    /// 1 where set, 0 elsewhere, as counts of operators.
+    #[inline(always)]
+    pub fn count32(self) -> Lanes<u32, W> {
+        Lanes(self.0).map(u32::from)
+    }
+}
+
+impl<const W: usize> BitAnd for Mask<W> {
+    type Output = Self;
+    #[inline(always)]
+    fn bitand(self, other: Self) -> Self {
+        let mut out = self.0;
+        for l in 0..W {
+            out[l] = self.0[l] & other.0[l];
+        }
+        Mask(out)
+    }
+}
+
+impl<const W: usize> BitOr for Mask<W> {
+    type Output = Self;
+    #[inline(always)]
+    fn bitor(self, other: Self) -> Self {
+        let mut out = self.0;
+        for l in 0..W {
+            out[l] = self.0[l] | other.0[l];
+        }
+        Mask(out)
+    }
+}
+
+impl<const W: usize> Not for Mask<W> {
+    type Output = Self;
+    #[inline(always)]
+    fn not(self) -> Self {
+        let mut out = self.0;
+        for l in 0..W {
+            out[l] = !self.0[l];
+        }
+        Mask(out)
+    }
+}

@@ -1,0 +1,442 @@
+//! The play-operator bank of IHC and WIHC (`crate::walk::PlayBank`) for every lane of a block:
+//! its state, the exact per-sample solve (the walk over the linear segments, ERRATA item 4) and
+//! the memory update, eqs. (1)-(2).
+//!
+//! The walk of each lane starts at its own first operator that is not yet moving and visits as
+//! many segments as its own solution needs: lane `l` reads its operator `cursor[l]` (a gather),
+//! and the block walks as long as one of its lanes does. Most samples of a sampled trajectory
+//! end on the first segment, so a block usually walks once.
+
+use super::lanes::{Lanes, Mask};
+use super::storage::{Block, PlantRows};
+use crate::Real;
+use crate::walk::SYNC_INTERVAL;
+
+type L<T, const W: usize> = Lanes<T, W>;
+type U<const W: usize> = Lanes<u32, W>;
+
+/// The equation a compensator solves on one linear segment, lane by lane
+/// (`crate::walk::SegmentEquation`).
+pub(crate) trait LaneEquation<T: Real, const W: usize> {
+    /// The residual at `x`, increasing in `x`.
+    fn residual(&self, x: L<T, W>, alpha: L<T, W>, beta: L<T, W>) -> L<T, W>;
+    /// The control emitted at `x`: by default the bank's output `alpha x + beta`.
+    #[inline(always)]
+    fn control(&self, x: L<T, W>, alpha: L<T, W>, beta: L<T, W>) -> L<T, W> {
+        alpha * x + beta
+    }
+    /// The `x` where the control equals `v`: by default `(v - beta) / alpha`.
+    #[inline(always)]
+    fn input_at_control(&self, v: L<T, W>, alpha: L<T, W>, beta: L<T, W>) -> L<T, W> {
+        (v - beta) / alpha
+    }
+    /// The rounding allowance of the residual at a limit (by default 0).
+    #[inline(always)]
+    fn rounding(&self, _x: L<T, W>, _alpha: L<T, W>, _beta: L<T, W>) -> L<T, W> {
+        Lanes::zero()
+    }
+    /// The root in `[lo, hi]` for the lanes of `active`.
+    #[allow(clippy::too_many_arguments)]
+    fn root(
+        &self,
+        lo: L<T, W>,
+        hi: L<T, W>,
+        f_lo: L<T, W>,
+        f_hi: L<T, W>,
+        alpha: L<T, W>,
+        beta: L<T, W>,
+        inverse_alpha: L<T, W>,
+        active: Mask<W>,
+    ) -> L<T, W>;
+}
+
+/// The state of every lane's bank besides its memory (`crate::walk::PlayBank`'s fields).
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct PlayState<T, const W: usize> {
+    pub a: L<T, W>,
+    pub inverse_a: L<T, W>,
+    pub input: L<T, W>,
+    pub memory_sum: L<T, W>,
+    pub operators: U<W>,
+    pub rising: U<W>,
+    pub falling: U<W>,
+    pub always: U<W>,
+    pub since_sync: U<W>,
+}
+
+impl<T: Real, const W: usize> PlayState<T, W> {
+    #[inline(always)]
+    pub fn load(block: &Block<'_, T, W>, rows: &PlantRows) -> Self {
+        PlayState {
+            a: block.get(rows.scalar(PlantRows::A)),
+            inverse_a: block.get(rows.scalar(PlantRows::INVERSE_A)),
+            input: block.get(rows.scalar(PlantRows::INPUT)),
+            memory_sum: block.get(rows.scalar(PlantRows::MEMORY_SUM)),
+            operators: block.count(PlantRows::OPERATORS),
+            rising: block.count(PlantRows::RISING),
+            falling: block.count(PlantRows::FALLING),
+            always: block.count(PlantRows::ALWAYS),
+            since_sync: block.count(PlantRows::SINCE_SYNC),
+        }
+    }
+
+    /// Writes back what a sample changes.
+    #[inline(always)]
+    pub fn store(&self, block: &mut Block<'_, T, W>, rows: &PlantRows) {
+        block.set(rows.scalar(PlantRows::INPUT), self.input);
+        block.set(rows.scalar(PlantRows::MEMORY_SUM), self.memory_sum);
+        block.set_count(PlantRows::RISING, self.rising);
+        block.set_count(PlantRows::FALLING, self.falling);
+        block.set_count(PlantRows::SINCE_SYNC, self.since_sync);
+    }
+
+    /// The bank's output at its last input, `a x + sum b_i w_i`.
+    #[inline(always)]
+    pub fn output(&self) -> L<T, W> {
+        self.a * self.input + self.memory_sum
+    }
+}
+
+/// The solution of [`solve`] in every lane: the bank's input, whether a limit cut it short,
+/// and the segment it lies on.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct LaneSolution<T, const W: usize> {
+    pub input: L<T, W>,
+    pub saturated: Mask<W>,
+    pub alpha: L<T, W>,
+    pub beta: L<T, W>,
+    pub moving: U<W>,
+    pub rising: Mask<W>,
+}
+
+/// `crate::walk::PlayBank::solve` for the lanes of `active` (the others' results are
+/// meaningless): walks each lane's segments from its last input in the direction that brings
+/// its residual to zero, keeping the control within `[limit_min, limit_max]`.
+#[allow(clippy::too_many_arguments)]
+#[inline(always)]
+pub(crate) fn solve<T: Real, E: LaneEquation<T, W>, const W: usize>(
+    block: &Block<'_, T, W>,
+    rows: &PlantRows,
+    state: &PlayState<T, W>,
+    equation: &E,
+    f_prev: L<T, W>,
+    limit_min: L<T, W>,
+    limit_max: L<T, W>,
+    active: Mask<W>,
+) -> LaneSolution<T, W> {
+    let zero = Lanes::zero();
+    let rising = f_prev.le(zero);
+    let first = U::select(rising, state.rising, state.falling).zip(state.operators, u32::min);
+    // The moving operators fold into the first segment: prefix[first - 1], and the reciprocal
+    // slope 1 / (a + prefix[first - 1]) from the table (1 / a with none moving).
+    let some_moving = first.test(|k| k > 0);
+    let before = first.map(|k| k.saturating_sub(1));
+    let moving_weight = block
+        .gather(rows.prefix(), before)
+        .or_keep(some_moving, zero);
+    let mut inverse_alpha = block
+        .gather(rows.inverse_alpha(), before)
+        .or_keep(some_moving, state.inverse_a);
+    let mut alpha = state.a + moving_weight;
+    let mut beta = state.memory_sum - moving_weight * state.input;
+    let mut moving = first;
+    // The walk: `edge` is the end of the segment reached so far (lo rising, hi falling).
+    let (mut edge, mut f_edge) = (state.input, f_prev);
+    let (mut lo, mut hi, mut f_lo, mut f_hi) = (zero, zero, zero, zero);
+    let mut found = Mask::splat(false);
+    let mut walking = active;
+    let mut cursor = first;
+    loop {
+        walking = walking & cursor.compare(state.operators, |k, n| k < n);
+        if !walking.any() {
+            break;
+        }
+        let w = block.gather(rows.memory(), cursor);
+        let r = block.gather(rows.thresholds(), cursor);
+        let b = block.gather(rows.weights(), cursor);
+        // Rising, operator i starts moving at u = max(w_i + r_i, lo); falling, at
+        // l = min(w_i, hi).
+        let breakpoint = (w + r).max(edge).or_keep(rising, w.min(edge));
+        let control = equation.control(breakpoint, alpha, beta);
+        let at_limit = Mask::choose(rising, control.ge(limit_max), control.le(limit_min));
+        let walks = walking.and_not(at_limit);
+        let f_break = equation.residual(breakpoint, alpha, beta);
+        let crossed = Mask::choose(rising, f_break.ge(zero), f_break.le(zero));
+        let hit = walks & crossed;
+        lo = edge.or_keep(rising, breakpoint).or_keep(hit, lo);
+        hi = breakpoint.or_keep(rising, edge).or_keep(hit, hi);
+        f_lo = f_edge.or_keep(rising, f_break).or_keep(hit, f_lo);
+        f_hi = f_break.or_keep(rising, f_edge).or_keep(hit, f_hi);
+        found = found | hit;
+        let advance = walks.and_not(hit);
+        // Operator i starts moving: b_i w_i becomes b_i (x - r_i) rising, b_i x falling.
+        let next = cursor.map(|k| k + 1);
+        moving = next.or_keep(advance, moving);
+        alpha = (alpha + b).or_keep(advance, alpha);
+        let held = (b * (r + w)).or_keep(rising, b * w);
+        beta = (beta - held).or_keep(advance, beta);
+        inverse_alpha = block
+            .gather(rows.inverse_alpha(), cursor)
+            .or_keep(advance, inverse_alpha);
+        edge = breakpoint.or_keep(advance, edge);
+        f_edge = f_break.or_keep(advance, f_edge);
+        cursor = next;
+        walking = advance;
+    }
+    // The lanes whose walk ended without a sign change: up to the limit.
+    let to_limit = active.and_not(found);
+    let mut saturated = Mask::splat(false);
+    let mut input = zero;
+    if to_limit.any() {
+        let v_limit = limit_max.or_keep(rising, limit_min);
+        let end = equation.input_at_control(v_limit, alpha, beta);
+        let f_end = equation.residual(end, alpha, beta);
+        let rounding = equation.rounding(end, alpha, beta);
+        saturated = to_limit & Mask::choose(rising, f_end.lt(-rounding), f_end.gt(rounding));
+        // A clamped lane's input stays on the walk's last segment: the end clamped to its
+        // start (as `crate::walk::PlayBank::solve`).
+        let clamped = end.max(edge).or_keep(rising, end.min(edge));
+        input = clamped.or_keep(saturated, input);
+        let bracketed = to_limit.and_not(saturated);
+        lo = edge.or_keep(rising, end).or_keep(bracketed, lo);
+        hi = end.or_keep(rising, edge).or_keep(bracketed, hi);
+        f_lo = f_edge.or_keep(rising, f_end).or_keep(bracketed, f_lo);
+        f_hi = f_end.or_keep(rising, f_edge).or_keep(bracketed, f_hi);
+    }
+    let solving = active.and_not(saturated);
+    let root = equation.root(lo, hi, f_lo, f_hi, alpha, beta, inverse_alpha, solving);
+    LaneSolution {
+        input: root.or_keep(solving, input),
+        saturated,
+        alpha,
+        beta,
+        moving,
+        rising,
+    }
+}
+
+/// What feeding an input to the operators gives, when counted.
+pub(crate) struct Fed<T, const W: usize> {
+    pub rising: U<W>,
+    pub falling: U<W>,
+    pub sum: L<T, W>,
+}
+
+/// Feeds `x` to the operators of the `active` lanes (eqs. (1)-(2), `crate::play::feed_bank`).
+#[allow(clippy::too_many_arguments)]
+/// With `count`, also counts the operators at either edge of their band and sums `b_i w_i` in
+/// four partial sums exactly as `crate::play::four_way_sum` does for each lane's own operator
+/// count (`uniform`: every lane has the bank's `rows.n` operators).
+#[inline(always)]
+pub(crate) fn update_memory<T: Real, const W: usize>(
+    block: &mut Block<'_, T, W>,
+    thresholds: usize,
+    weights: usize,
+    memory: usize,
+    n: usize,
+    operators: U<W>,
+    x: L<T, W>,
+    active: Mask<W>,
+    count: bool,
+    uniform: bool,
+) -> Fed<T, W> {
+    update_memory_with(
+        block, thresholds, weights, memory, n, operators, x, active, count, count, uniform,
+    )
+}
+
+/// [`update_memory`], with the counts of operators at either edge (`edges`) and the weighted
+/// sum (`sum`) asked for separately.
+#[allow(clippy::too_many_arguments)]
+#[inline(always)]
+pub(crate) fn update_memory_with<T: Real, const W: usize>(
+    block: &mut Block<'_, T, W>,
+    thresholds: usize,
+    weights: usize,
+    memory: usize,
+    n: usize,
+    operators: U<W>,
+    x: L<T, W>,
+    active: Mask<W>,
+    edges: bool,
+    sum: bool,
+    uniform: bool,
+) -> Fed<T, W> {
+    let zero = Lanes::<T, W>::zero();
+    let mut rising = Lanes::splat(0u32);
+    let mut falling = Lanes::splat(0u32);
+    let mut partial = [zero; 4];
+    let mut tail = [zero; 3];
+    // The lanes' first operator beyond the four-way groups.
+    let full = operators.map(|n| n / 4 * 4);
+    let uniform_full = n / 4 * 4;
+    for i in 0..n {
+        let r = block.get(thresholds + i);
+        let w = block.get(memory + i);
+        // f_r(x, w) = max(x - r, min(x, w)) as `crate::play::one_sided` writes it.
+        let lower = x - r;
+        let raised = lower.or_keep(w.lt(lower), w);
+        let next = x.or_keep(raised.gt(x), raised);
+        block.set(memory + i, next.or_keep(active, w));
+        let i32 = i as u32;
+        let inside = operators.test(|n| i32 < n);
+        if edges {
+            let (up, down) = if uniform {
+                (next.le(lower), next.ge(x))
+            } else {
+                (next.le(lower) & inside, next.ge(x) & inside)
+            };
+            rising = rising + up.count32();
+            falling = falling + down.count32();
+        }
+        if !sum {
+            continue;
+        }
+        let term = block.get(weights + i) * next;
+        if uniform {
+            if i < uniform_full {
+                partial[i % 4] = partial[i % 4] + term;
+            } else {
+                tail[(i - uniform_full).min(2)] = term;
+            }
+        } else {
+            let grouped = full.test(|f| i32 < f);
+            partial[i % 4] = (partial[i % 4] + term).or_keep(grouped, partial[i % 4]);
+            for (k, t) in tail.iter_mut().enumerate() {
+                let here = full.test(|f| f + k as u32 == i32) & inside;
+                *t = term.or_keep(here, *t);
+            }
+        }
+    }
+    let mut total = (partial[0] + partial[1]) + (partial[2] + partial[3]);
+    if sum {
+        for (k, t) in tail.into_iter().enumerate() {
+            let has = full.compare(operators, |f, n| f + (k as u32) < n);
+            total = (total + t).or_keep(has, total);
+        }
+    }
+    Fed {
+        rising,
+        falling,
+        sum: total,
+    }
+}
+
+/// `crate::walk::PlayBank::feed` for the lanes of `active`: the memory, the counts of moving
+/// operators and the memory sum from `x`. Returns the bank's output `a x + sum b_i w_i`.
+#[inline(always)]
+pub(crate) fn feed<T: Real, const W: usize>(
+    block: &mut Block<'_, T, W>,
+    rows: &PlantRows,
+    state: &mut PlayState<T, W>,
+    x: L<T, W>,
+    active: Mask<W>,
+    uniform: bool,
+) -> L<T, W> {
+    let fed = update_memory(
+        block,
+        rows.thresholds(),
+        rows.weights(),
+        rows.memory(),
+        rows.n,
+        state.operators,
+        x,
+        active,
+        true,
+        uniform,
+    );
+    state.input = x.or_keep(active, state.input);
+    state.memory_sum = fed.sum.or_keep(active, state.memory_sum);
+    state.rising = fed.rising.or_keep(active, state.rising);
+    state.falling = fed.falling.or_keep(active, state.falling);
+    state.a * x + fed.sum
+}
+
+/// `crate::walk::PlayBank::feed_solved` for the lanes of `active`: the memory from the solved
+/// input, the memory sum and the counts of moving operators from the solved segment, except
+/// every `SYNC_INTERVAL` samples of a lane, when they are recomputed ([`feed`]).
+#[inline(always)]
+pub(crate) fn feed_solved<T: Real, const W: usize>(
+    block: &mut Block<'_, T, W>,
+    rows: &PlantRows,
+    state: &mut PlayState<T, W>,
+    solution: &LaneSolution<T, W>,
+    active: Mask<W>,
+    uniform: bool,
+) -> L<T, W> {
+    feed_solved_or_full(
+        block,
+        rows,
+        state,
+        solution,
+        active,
+        Mask::splat(false),
+        uniform,
+    )
+}
+
+/// [`feed_solved`] for the lanes of `active`, except those of `full`, which take [`feed`]
+/// (with the same input) without counting towards the next recomputation.
+#[inline(always)]
+pub(crate) fn feed_solved_or_full<T: Real, const W: usize>(
+    block: &mut Block<'_, T, W>,
+    rows: &PlantRows,
+    state: &mut PlayState<T, W>,
+    solution: &LaneSolution<T, W>,
+    active: Mask<W>,
+    full: Mask<W>,
+    uniform: bool,
+) -> L<T, W> {
+    let x = solution.input;
+    let solved = active.and_not(full);
+    let since = state.since_sync.map(|s| s + 1);
+    let sync = solved & since.test(|s| s >= SYNC_INTERVAL);
+    state.since_sync = since
+        .or_keep(solved, state.since_sync)
+        .or_keep(!sync, Lanes::splat(0));
+    let recount = (sync | full) & active;
+    let fed = update_memory(
+        block,
+        rows.thresholds(),
+        rows.weights(),
+        rows.memory(),
+        rows.n,
+        state.operators,
+        x,
+        active,
+        recount.any(),
+        uniform,
+    );
+    // Beyond the moving operators the others hold, away from the edge of their band on the
+    // side the input went; only the zero-threshold ones sit on both edges.
+    let rising = U::select(solution.rising, solution.moving, state.always);
+    let falling = U::select(solution.rising, state.always, solution.moving);
+    state.rising = U::select(recount, fed.rising, rising).or_keep(active, state.rising);
+    state.falling = U::select(recount, fed.falling, falling).or_keep(active, state.falling);
+    state.input = x.or_keep(active, state.input);
+    let (alpha, beta) = (solution.alpha, solution.beta);
+    let segment_sum = (alpha - state.a) * x + beta;
+    state.memory_sum = fed
+        .sum
+        .or_keep(recount, segment_sum)
+        .or_keep(active, state.memory_sum);
+    (state.a * x + fed.sum).or_keep(recount, alpha * x + beta)
+}
+
+/// `crate::walk::PlayBank::reset` for every lane: zero memory, last input 0, the moving
+/// operators of the reset state.
+#[inline(always)]
+pub(crate) fn reset<T: Real, const W: usize>(
+    block: &mut Block<'_, T, W>,
+    rows: &PlantRows,
+    state: &mut PlayState<T, W>,
+) {
+    for i in 0..rows.n {
+        block.set(rows.memory() + i, Lanes::zero());
+    }
+    state.input = Lanes::zero();
+    state.memory_sum = Lanes::zero();
+    state.since_sync = Lanes::splat(0);
+    state.rising = state.always;
+    state.falling = state.operators;
+}

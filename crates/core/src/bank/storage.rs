@@ -1,0 +1,353 @@
+//! Where a bank keeps its channels: blocks of `W` lanes, each block a run of rows (one value per
+//! lane), on the heap or in fixed arrays.
+
+use super::lanes::Lanes;
+use crate::buffer::filled;
+use crate::{Bounded, Buffer, CoreError, Real};
+
+/// The storage of a bank: rows of `W` values (`[T; W]`), of operator counts (`[u32; W]`) and of
+/// diagnostic counters (`[u64; W]`).
+///
+/// [`Heap`] (feature `alloc`) holds any number of channels; [`Fixed`] holds a number known at
+/// compile time without an allocator (see [`plant_bank_rows`] and [`dihc_bank_rows`] for the
+/// sizes).
+pub trait BankStorage<T: Real, const W: usize> {
+    /// Rows of sample values.
+    type Values: Buffer<[T; W]> + core::fmt::Debug;
+    /// Rows of counts (operators, moving operators, degrees).
+    type Counts: Buffer<[u32; W]> + core::fmt::Debug;
+    /// Rows of diagnostic counters.
+    type Counters: Buffer<[u64; W]> + core::fmt::Debug;
+}
+
+/// Heap storage (`Vec`s), for any number of channels.
+#[cfg(feature = "alloc")]
+#[derive(Debug, Clone, Copy, Default)]
+pub struct Heap;
+
+#[cfg(feature = "alloc")]
+impl<T: Real, const W: usize> BankStorage<T, W> for Heap {
+    type Values = alloc::vec::Vec<[T; W]>;
+    type Counts = alloc::vec::Vec<[u32; W]>;
+    type Counters = alloc::vec::Vec<[u64; W]>;
+}
+
+/// Fixed storage without an allocator: up to `VALUES` rows of values, `COUNTS` rows of counts
+/// and `COUNTERS` rows of counters (each row `W` lanes). [`plant_bank_rows`] and
+/// [`dihc_bank_rows`] compute them for a number of channels and operators:
+///
+/// ```
+/// use hystcomp_core::{Fixed, IhcBank, PLAIN_DEGREE, plant_bank_rows};
+///
+/// // Six axes, ten operators each, the paper's cubic, two lanes per block.
+/// const ROWS: [usize; 3] = plant_bank_rows(6, 10, PLAIN_DEGREE, 2);
+/// type SixAxes = IhcBank<f32, Fixed<{ ROWS[0] }, { ROWS[1] }, { ROWS[2] }>, 2>;
+/// ```
+#[derive(Debug, Clone, Copy, Default)]
+pub struct Fixed<const VALUES: usize, const COUNTS: usize, const COUNTERS: usize>;
+
+impl<T: Real, const W: usize, const VALUES: usize, const COUNTS: usize, const COUNTERS: usize>
+    BankStorage<T, W> for Fixed<VALUES, COUNTS, COUNTERS>
+{
+    type Values = Bounded<[T; W], VALUES>;
+    type Counts = Bounded<[u32; W], COUNTS>;
+    type Counters = Bounded<[u64; W], COUNTERS>;
+}
+
+/// The number of coefficient rows a bank of models with the paper's cubic input function
+/// stores (`c_1, c_2, c_3`).
+pub const PLAIN_DEGREE: usize = 3;
+
+/// The rows `[values, counts, counters]` an IHC or WIHC bank of `channels` channels needs, in
+/// blocks of `lanes`, for models of at most `operators` play operators and input polynomials of
+/// at most `degree` coefficients ([`PLAIN_DEGREE`] for the paper's cubic): the sizes of
+/// [`Fixed`].
+pub const fn plant_bank_rows(
+    channels: usize,
+    operators: usize,
+    degree: usize,
+    lanes: usize,
+) -> [usize; 3] {
+    let blocks = blocks(channels, lanes);
+    let rows = PlantRows::new(operators, degree);
+    [
+        blocks * rows.values,
+        blocks * PlantRows::COUNTS,
+        blocks * COUNTERS,
+    ]
+}
+
+/// The rows `[values, counts, counters]` a DIHC bank needs (see [`plant_bank_rows`]).
+pub const fn dihc_bank_rows(
+    channels: usize,
+    operators: usize,
+    degree: usize,
+    lanes: usize,
+) -> [usize; 3] {
+    let blocks = blocks(channels, lanes);
+    let rows = InverseRows::new(operators, degree);
+    [
+        blocks * rows.values,
+        blocks * InverseRows::COUNTS,
+        blocks * COUNTERS,
+    ]
+}
+
+/// Blocks of `lanes` channels needed for `channels`.
+pub(crate) const fn blocks(channels: usize, lanes: usize) -> usize {
+    if lanes == 0 {
+        0
+    } else {
+        channels.div_ceil(lanes)
+    }
+}
+
+/// Diagnostic counter rows of every block: saturated, loop-saturated, non-finite.
+pub(crate) const COUNTERS: usize = 3;
+pub(crate) const SATURATED: usize = 0;
+pub(crate) const LOOP_SATURATED: usize = 1;
+pub(crate) const NON_FINITE: usize = 2;
+
+/// The rows of one block of an IHC or WIHC bank: the lanes' play-operator bank (the inverse
+/// PI part of eq. (7) for IHC, the plant's PI part for WIHC) with its tables and state, the
+/// output guard and the input polynomial.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) struct PlantRows {
+    /// Operator rows (the largest operator count among the channels).
+    pub n: usize,
+    /// Coefficient rows of the input polynomials.
+    pub degree: usize,
+    /// Value rows per block.
+    pub values: usize,
+}
+
+impl PlantRows {
+    pub const fn new(n: usize, degree: usize) -> Self {
+        PlantRows {
+            n,
+            degree,
+            values: 5 * n + Self::SCALARS + degree,
+        }
+    }
+    pub const fn thresholds(&self) -> usize {
+        0
+    }
+    pub const fn weights(&self) -> usize {
+        self.n
+    }
+    /// `b_1 + ... + b_{k+1}`.
+    pub const fn prefix(&self) -> usize {
+        2 * self.n
+    }
+    /// `1 / (a + b_1 + ... + b_{k+1})`.
+    pub const fn inverse_alpha(&self) -> usize {
+        3 * self.n
+    }
+    pub const fn memory(&self) -> usize {
+        4 * self.n
+    }
+    pub const fn scalar(&self, which: usize) -> usize {
+        5 * self.n + which
+    }
+    /// Row of `c_{j + 1}`.
+    pub const fn coefficient(&self, j: usize) -> usize {
+        5 * self.n + Self::SCALARS + j
+    }
+    pub const A: usize = 0;
+    pub const INVERSE_A: usize = 1;
+    pub const INPUT: usize = 2;
+    pub const MEMORY_SUM: usize = 3;
+    pub const RELAXATION: usize = 4;
+    pub const LIMIT_MIN: usize = 5;
+    pub const LIMIT_MAX: usize = 6;
+    pub const PREVIOUS: usize = 7;
+    const SCALARS: usize = 8;
+
+    pub const COUNTS: usize = 7;
+    pub const OPERATORS: usize = 0;
+    pub const RISING: usize = 1;
+    pub const FALLING: usize = 2;
+    pub const ALWAYS: usize = 3;
+    pub const SINCE_SYNC: usize = 4;
+    pub const DEGREE: usize = 5;
+    pub const ODD_CUBIC: usize = 6;
+}
+
+/// The rows of one block of a DIHC bank: the inverse model (eq. (10)), its input range, the
+/// output guard and the input polynomial.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) struct InverseRows {
+    pub n: usize,
+    pub degree: usize,
+    pub values: usize,
+}
+
+impl InverseRows {
+    pub const fn new(n: usize, degree: usize) -> Self {
+        InverseRows {
+            n,
+            degree,
+            values: 3 * n + Self::SCALARS + degree,
+        }
+    }
+    pub const fn thresholds(&self) -> usize {
+        0
+    }
+    pub const fn weights(&self) -> usize {
+        self.n
+    }
+    pub const fn memory(&self) -> usize {
+        2 * self.n
+    }
+    pub const fn scalar(&self, which: usize) -> usize {
+        3 * self.n + which
+    }
+    pub const fn coefficient(&self, j: usize) -> usize {
+        3 * self.n + Self::SCALARS + j
+    }
+    pub const INPUT_MIN: usize = 0;
+    pub const INPUT_MAX: usize = 1;
+    pub const LIMIT_MIN: usize = 2;
+    pub const LIMIT_MAX: usize = 3;
+    pub const PREVIOUS: usize = 4;
+    const SCALARS: usize = 5;
+
+    pub const COUNTS: usize = 3;
+    pub const OPERATORS: usize = 0;
+    pub const DEGREE: usize = 1;
+    pub const ODD_CUBIC: usize = 2;
+}
+
+/// The whole storage of a bank, with the number of rows per block of each kind.
+#[derive(Debug, Clone)]
+pub(crate) struct Blocks<T: Real, S: BankStorage<T, W>, const W: usize> {
+    pub values: S::Values,
+    pub counts: S::Counts,
+    pub counters: S::Counters,
+    pub value_rows: usize,
+    pub count_rows: usize,
+}
+
+impl<T: Real, S: BankStorage<T, W>, const W: usize> Blocks<T, S, W> {
+    /// Zeroed storage for `blocks` blocks.
+    pub fn new(blocks: usize, value_rows: usize, count_rows: usize) -> Result<Self, CoreError> {
+        Ok(Blocks {
+            values: filled([T::zero(); W], blocks * value_rows)?,
+            counts: filled([0; W], blocks * count_rows)?,
+            counters: filled([0; W], blocks * COUNTERS)?,
+            value_rows,
+            count_rows,
+        })
+    }
+
+    /// Every block, in channel order.
+    #[inline(always)]
+    pub fn blocks_mut(&mut self) -> impl Iterator<Item = Block<'_, T, W>> {
+        let (v, c) = (self.value_rows.max(1), self.count_rows.max(1));
+        self.values
+            .as_mut()
+            .chunks_exact_mut(v)
+            .zip(self.counts.as_mut().chunks_exact_mut(c))
+            .zip(self.counters.as_mut().chunks_exact_mut(COUNTERS))
+            .map(|((values, counts), counters)| Block {
+                values,
+                counts,
+                counters,
+            })
+    }
+
+    /// The value in `row` of `channel`'s lane (0 when out of range).
+    pub fn value(&self, channel: usize, row: usize) -> T {
+        let at = (channel / W) * self.value_rows + row;
+        self.values
+            .as_ref()
+            .get(at)
+            .map_or(T::zero(), |r| r[channel % W])
+    }
+
+    /// The counter in `row` of `channel`'s lane.
+    pub fn counter(&self, channel: usize, row: usize) -> u64 {
+        let at = (channel / W) * COUNTERS + row;
+        self.counters.as_ref().get(at).map_or(0, |r| r[channel % W])
+    }
+
+    /// Sets the value in `row` of `channel`'s lane.
+    pub fn set_value(&mut self, channel: usize, row: usize, value: T) {
+        let at = (channel / W) * self.value_rows + row;
+        if let Some(r) = self.values.as_mut().get_mut(at) {
+            r[channel % W] = value;
+        }
+    }
+
+    /// Sets the counter in `row` of `channel`'s lane.
+    pub fn set_counter(&mut self, channel: usize, row: usize, value: u64) {
+        let at = (channel / W) * COUNTERS + row;
+        if let Some(r) = self.counters.as_mut().get_mut(at) {
+            r[channel % W] = value;
+        }
+    }
+
+    /// Sets the count in `row` of `channel`'s lane.
+    pub fn set_count(&mut self, channel: usize, row: usize, value: u32) {
+        let at = (channel / W) * self.count_rows + row;
+        if let Some(r) = self.counts.as_mut().get_mut(at) {
+            r[channel % W] = value;
+        }
+    }
+}
+
+/// One block of a bank: its rows of values, counts and counters.
+pub(crate) struct Block<'a, T, const W: usize> {
+    pub values: &'a mut [[T; W]],
+    pub counts: &'a mut [[u32; W]],
+    pub counters: &'a mut [[u64; W]],
+}
+
+impl<T: Real, const W: usize> Block<'_, T, W> {
+    /// Row `row` of values (zeros when out of range, which the layout never asks for).
+    #[inline(always)]
+    pub fn get(&self, row: usize) -> Lanes<T, W> {
+        Lanes(self.values.get(row).copied().unwrap_or([T::zero(); W]))
+    }
+
+    #[inline(always)]
+    pub fn set(&mut self, row: usize, value: Lanes<T, W>) {
+        if let Some(r) = self.values.get_mut(row) {
+            *r = value.0;
+        }
+    }
+
+    #[inline(always)]
+    pub fn count(&self, row: usize) -> Lanes<u32, W> {
+        Lanes(self.counts.get(row).copied().unwrap_or([0; W]))
+    }
+
+    #[inline(always)]
+    pub fn set_count(&mut self, row: usize, value: Lanes<u32, W>) {
+        if let Some(r) = self.counts.get_mut(row) {
+            *r = value.0;
+        }
+    }
+
+    #[inline(always)]
+    pub fn counter(&self, row: usize) -> Lanes<u64, W> {
+        Lanes(self.counters.get(row).copied().unwrap_or([0; W]))
+    }
+
+    #[inline(always)]
+    pub fn set_counter(&mut self, row: usize, value: Lanes<u64, W>) {
+        if let Some(r) = self.counters.get_mut(row) {
+            *r = value.0;
+        }
+    }
+
+    /// Lane `l` of row `base + index[l]`: each lane reads its own operator.
+    #[inline(always)]
+    pub fn gather(&self, base: usize, index: Lanes<u32, W>) -> Lanes<T, W> {
+        Lanes(core::array::from_fn(|l| {
+            self.values
+                .get(base + index.0[l] as usize)
+                .map_or(T::zero(), |r| r[l])
+        }))
+    }
+}

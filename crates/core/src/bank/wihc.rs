@@ -1,0 +1,284 @@
+//! A bank of WIHC channels (section 3.2, eq. (9)): [`crate::Wihc`] lane by lane.
+
+use super::guard::GuardLanes;
+use super::ihc::{plant_limits, rounding_tolerance};
+use super::lanes::{Lanes, Mask};
+use super::plant::{all_odd_cubic, cubic_lanes, polynomial_lanes, write_lane};
+use super::play::{LaneEquation, LaneSolution, PlayState, feed, feed_solved_or_full, solve};
+use super::root::{LaneRemainder, increasing_root};
+use super::run::{BlockKernel, run};
+use super::storage::{BankStorage, Block, Blocks, PlantRows, blocks};
+use super::{BankError, CompensatorBank, LANES, check_bank_size, check_tick, limits_of};
+use crate::{Buffer, CoreError, Diagnostics, Mpim, OutputLimits, Real, SolveMode, Wihc};
+
+type L<T, const W: usize> = Lanes<T, W>;
+
+/// WIHC for many channels at once: channel `c` is [`crate::Wihc`] built from `plants[c]` with
+/// its limits and the bank's solve mode, and gives the same outputs, bit for bit (see the
+/// [module documentation](super)).
+#[derive(Debug, Clone)]
+pub struct WihcBank<T: Real, S: BankStorage<T, W>, const W: usize = LANES> {
+    blocks: Blocks<T, S, W>,
+    kernel: WihcKernel,
+    channels: usize,
+}
+
+/// What every block of a WIHC bank shares.
+#[derive(Debug, Clone, Copy)]
+struct WihcKernel {
+    rows: PlantRows,
+    mode: SolveMode,
+    uniform: bool,
+    cubic: bool,
+}
+
+impl<T: Real, S: BankStorage<T, W>, const W: usize> WihcBank<T, S, W> {
+    /// A bank of one WIHC per plant model, with `limits` for every channel (one pair shared by
+    /// all, or one per channel) and one solve mode for all. Each channel is checked as
+    /// [`crate::Wihc::new`] checks it; a refused one is named by its index.
+    pub fn new<B: Buffer<T>>(
+        plants: &[Mpim<T, B>],
+        limits: &[OutputLimits<T>],
+        mode: SolveMode,
+    ) -> Result<Self, BankError> {
+        check_bank_size(plants.len(), limits.len())?;
+        let n = plants.iter().map(Mpim::len).max().unwrap_or(0);
+        let degree = plants
+            .iter()
+            .map(|p| p.input_polynomial().degree())
+            .fold(super::PLAIN_DEGREE, usize::max);
+        let rows = PlantRows::new(n, degree);
+        let count = blocks(plants.len(), W);
+        let mut storage = Blocks::<T, S, W>::new(count, rows.values, PlantRows::COUNTS)
+            .map_err(BankError::Bank)?;
+        for (channel, plant) in plants.iter().enumerate() {
+            let wihc = Wihc::<T, B>::new(plant, limits_of(limits, channel)?, mode)
+                .map_err(|error| BankError::Channel { channel, error })?;
+            let lanes = if channel + 1 == plants.len() {
+                channel..count * W
+            } else {
+                channel..channel + 1
+            };
+            for lane in lanes {
+                write_lane(
+                    &mut storage,
+                    &rows,
+                    lane,
+                    &wihc.bank,
+                    &wihc.input,
+                    wihc.relaxation,
+                    &wihc.guard,
+                );
+            }
+        }
+        Ok(WihcBank {
+            blocks: storage,
+            kernel: WihcKernel {
+                rows,
+                mode,
+                uniform: plants.iter().all(|p| p.len() == n),
+                cubic: plants.iter().all(|p| p.input_polynomial().is_odd_cubic()),
+            },
+            channels: plants.len(),
+        })
+    }
+
+    /// The solve mode of every channel.
+    pub fn mode(&self) -> SolveMode {
+        self.kernel.mode
+    }
+
+    /// The under-relaxation `lambda` of [`SolveMode::DelayedGuarded`] of `channel` (see
+    /// [`crate::Wihc::guard_relaxation`]).
+    pub fn guard_relaxation(&self, channel: usize) -> Option<T> {
+        (channel < self.channels).then(|| {
+            self.blocks
+                .value(channel, self.kernel.rows.scalar(PlantRows::RELAXATION))
+        })
+    }
+}
+
+impl<T: Real, S: BankStorage<T, W>, const W: usize> CompensatorBank<T> for WihcBank<T, S, W> {
+    fn channels(&self) -> usize {
+        self.channels
+    }
+
+    fn reset(&mut self) {
+        for mut block in self.blocks.blocks_mut() {
+            self.kernel.reset(&mut block);
+        }
+    }
+
+    #[inline]
+    fn step(&mut self, desired: &[T], control: &mut [T]) -> Result<(), CoreError> {
+        check_tick(self.channels, desired.len(), control.len())?;
+        run(&self.kernel, self.blocks.blocks_mut(), desired, control);
+        Ok(())
+    }
+
+    fn limits(&self, channel: usize) -> Option<OutputLimits<T>> {
+        plant_limits(&self.blocks, &self.kernel.rows, channel, self.channels)
+    }
+
+    fn diagnostics(&self, channel: usize) -> Option<Diagnostics> {
+        super::diagnostics_of(&self.blocks, channel, self.channels)
+    }
+}
+
+/// Eq. (9) on one segment of every lane (`crate::wihc::Eq9`), in the voltage itself:
+/// `h(v) + alpha v + beta = y_d`.
+struct Eq9<T, R, const W: usize> {
+    remainder: R,
+    desired: L<T, W>,
+}
+
+impl<T: Real, R: LaneRemainder<T, W>, const W: usize> LaneEquation<T, W> for Eq9<T, R, W> {
+    #[inline(always)]
+    fn residual(&self, x: L<T, W>, alpha: L<T, W>, beta: L<T, W>) -> L<T, W> {
+        self.remainder.with_linear(x, alpha) + beta - self.desired
+    }
+    #[inline(always)]
+    fn control(&self, x: L<T, W>, _alpha: L<T, W>, _beta: L<T, W>) -> L<T, W> {
+        x
+    }
+    #[inline(always)]
+    fn input_at_control(&self, v: L<T, W>, _alpha: L<T, W>, _beta: L<T, W>) -> L<T, W> {
+        v
+    }
+    #[inline(always)]
+    fn rounding(&self, x: L<T, W>, alpha: L<T, W>, beta: L<T, W>) -> L<T, W> {
+        let terms = self.remainder.size(x) + (alpha * x).abs() + beta.abs() + self.desired.abs();
+        rounding_tolerance(terms)
+    }
+    #[inline(always)]
+    fn root(
+        &self,
+        lo: L<T, W>,
+        hi: L<T, W>,
+        f_lo: L<T, W>,
+        f_hi: L<T, W>,
+        alpha: L<T, W>,
+        beta: L<T, W>,
+        _inv: L<T, W>,
+        active: Mask<W>,
+    ) -> L<T, W> {
+        increasing_root(
+            self.remainder,
+            alpha,
+            beta - self.desired,
+            lo,
+            hi,
+            f_lo,
+            f_hi,
+            active,
+        )
+    }
+}
+
+impl WihcKernel {
+    /// One sample of every lane with the remainder `h` (`crate::wihc::wihc_step`).
+    #[inline(always)]
+    fn step_with<T: Real, R: LaneRemainder<T, W>, const W: usize>(
+        &self,
+        block: &mut Block<'_, T, W>,
+        desired: L<T, W>,
+        remainder: R,
+    ) -> L<T, W> {
+        let rows = &self.rows;
+        let mut guard = GuardLanes::load(
+            block,
+            rows.scalar(PlantRows::LIMIT_MIN),
+            rows.scalar(PlantRows::LIMIT_MAX),
+            rows.scalar(PlantRows::PREVIOUS),
+        );
+        let mut state = PlayState::load(block, rows);
+        let active = guard.accept(desired);
+        let v_prev = state.input;
+        let equation = Eq9 { remainder, desired };
+        let out = if self.mode == SolveMode::Exact {
+            let f_prev = remainder.value(v_prev) + state.output() - desired;
+            let s = solve(
+                block, rows, &state, &equation, f_prev, guard.min, guard.max, active,
+            );
+            let v = guard.emit(s.input, s.saturated, active);
+            // The solved segment's state when the output is the solution; a full feed of the
+            // clamped output otherwise.
+            let clamped = v.compare(s.input, |a, b| a != b);
+            let fed = LaneSolution { input: v, ..s };
+            feed_solved_or_full(block, rows, &mut state, &fed, active, clamped, self.uniform);
+            v
+        } else {
+            // H[v](t - Ts) = h(v(t - Ts)) + sum b_i F_{r_i}[v](t - Ts).
+            let h_prev = remainder.value(v_prev) + state.memory_sum;
+            let relaxation = block.get(rows.scalar(PlantRows::RELAXATION));
+            let guarded = if self.mode == SolveMode::DelayedGuarded {
+                relaxation.lt(Lanes::splat(T::one()))
+            } else {
+                Mask::splat(false)
+            };
+            let inverse_a2 = state.inverse_a;
+            let relaxed = v_prev + relaxation * (desired - h_prev - state.a * v_prev) * inverse_a2;
+            let next = relaxed.or_keep(guarded, (desired - h_prev) * inverse_a2);
+            let (out, clamped) = guard.clamp(next, Mask::splat(false));
+            // A clamped sample counts as a loop saturation when the exact eq. (9) could have
+            // been met within the limits from the same state (solved only then).
+            let check = clamped & active;
+            let mut reachable = Mask::splat(false);
+            if check.any() {
+                let f_prev = remainder.value(v_prev) + state.output() - desired;
+                let s = solve(
+                    block, rows, &state, &equation, f_prev, guard.min, guard.max, check,
+                );
+                reachable = check.and_not(s.saturated);
+            }
+            let v = guard.record(out, clamped, reachable, active);
+            feed(block, rows, &mut state, v, active, self.uniform);
+            v
+        };
+        state.store(block, rows);
+        guard.store(block, rows.scalar(PlantRows::PREVIOUS));
+        out
+    }
+
+    /// `Wihc::reset` for every lane of a block.
+    fn reset<T: Real, const W: usize>(&self, block: &mut Block<'_, T, W>) {
+        let rows = &self.rows;
+        let mut guard = GuardLanes::load(
+            block,
+            rows.scalar(PlantRows::LIMIT_MIN),
+            rows.scalar(PlantRows::LIMIT_MAX),
+            rows.scalar(PlantRows::PREVIOUS),
+        );
+        let mut state = PlayState::load(block, rows);
+        super::play::reset(block, rows, &mut state);
+        guard.reset();
+        // 0 outside the limits: the compensator starts at the nearest limit, the plant with it.
+        let v0 = guard.previous;
+        let away = v0.compare(Lanes::zero(), |a, b| a != b);
+        if away.any() {
+            feed(block, rows, &mut state, v0, away, self.uniform);
+        }
+        state.store(block, rows);
+        guard.store(block, rows.scalar(PlantRows::PREVIOUS));
+    }
+}
+
+impl<T: Real, const W: usize> BlockKernel<T, W> for WihcKernel {
+    #[inline(always)]
+    fn step(&self, block: &mut Block<'_, T, W>, desired: L<T, W>) -> L<T, W> {
+        let first = self.rows.coefficient(0);
+        if self.cubic || all_odd_cubic(block, PlantRows::ODD_CUBIC) {
+            let remainder = cubic_lanes(block, first);
+            self.step_with(block, desired, remainder)
+        } else {
+            let remainder = polynomial_lanes(
+                block,
+                first,
+                self.rows.degree,
+                PlantRows::DEGREE,
+                PlantRows::ODD_CUBIC,
+            );
+            self.step_with(block, desired, remainder)
+        }
+    }
+}
