@@ -291,3 +291,60 @@ fn makefile_builds_and_runs_both_examples() {
     assert!(stdout.contains(" V -> 40.000000 um"), "{stdout}");
     assert!(stdout.contains("round trip OK"), "{stdout}");
 }
+
+/// The C programs run under valgrind's memcheck: no invalid read or write, no use of an
+/// uninitialised value, no definite leak through the C ABI, on success (the round trip, the
+/// identify-save-load-compensate program) and on its refusals (an inverse model, no arguments).
+#[test]
+fn c_programs_run_clean_under_valgrind() {
+    if !hystcomp_testkit::require_tool(
+        "valgrind",
+        available("valgrind"),
+        "apt-get install valgrind",
+    ) {
+        return;
+    }
+    let dir = tempfile::tempdir().expect("a temporary directory");
+    let models = compile("bindings/c/tests/c/models.c", "models");
+    let runs: Vec<(&PathBuf, Vec<std::ffi::OsString>, i32)> = vec![
+        (
+            round_trip_program(),
+            vec!["models/table1-plant.json".into()],
+            0,
+        ),
+        (
+            round_trip_program(),
+            vec!["models/table2-inverse.json".into()],
+            1,
+        ),
+        (round_trip_program(), vec![], 2),
+        (&models, vec![dir.path().into()], 0),
+    ];
+    for (program, args, code) in runs {
+        let output = Command::new("valgrind")
+            .args([
+                "--error-exitcode=99",
+                "--leak-check=full",
+                "--show-leak-kinds=definite",
+                "--errors-for-leak-kinds=definite",
+                "-q",
+            ])
+            .arg(program)
+            .args(&args)
+            .current_dir(workspace_root())
+            .output()
+            .expect("valgrind runs");
+        let stderr = String::from_utf8_lossy(&output.stderr);
+        assert_eq!(
+            output.status.code(),
+            Some(code),
+            "{} {args:?} under valgrind:\n{stderr}",
+            program.display()
+        );
+        assert!(
+            !stderr.contains("=="),
+            "{} {args:?}: valgrind reported\n{stderr}",
+            program.display()
+        );
+    }
+}

@@ -634,7 +634,9 @@ fn a_model_with_creep_and_vibration_keeps_its_links_and_runs_its_chain() {
     assert!(mpim.is_null());
     // Bad links, each refused with its name, before any array is read when a length is wrong.
     let good = values_of(m);
-    let nothing = [f64::NAN; 1];
+    // NaN time constants, as many as the link's elements: the array must hold the stated
+    // length (a one-element array here was read past its end, which valgrind reported).
+    let nothing = vec![f64::NAN; good.creep_elements];
     type Edit = Box<dyn Fn(&mut HystcompModelValues)>;
     let cases: Vec<(Edit, c_int, &str)> = vec![
         (
