@@ -4,6 +4,19 @@
 //! hysteretic and log(t)-type creep nonlinearities", Control and Intelligent Systems 33 (2005)
 //! 134-147), acting on the hysteresis output.
 //!
+//! The structure follows Krejci & Kuhnen, "Inverse control of systems with hysteresis and
+//! creep", IEE Proc. Control Theory Appl. 148 (2001) 185-192, and
+//! Kuhnen & Krejci, "Compensation of complex hysteresis and creep effects in piezoelectrically
+//! actuated systems - a new Preisach modeling approach", IEEE Trans. Autom. Control 54 (2009)
+//! 537-550 (the paper's refs. [25] and [8]): creep as a linear
+//! superposition of first-order (Kelvin-Voigt) elements at fixed time constants, weighted by
+//! identified coefficients. **Where it acts**: on the hysteresis output, not on the voltage,
+//! because what creeps in a stack is the displacement the domains produced (a held voltage
+//! keeps moving the stack while the voltage does not change); written this way the chain's
+//! creep is identified jointly with the MPIM by linear least squares and inverted by a filter
+//! (below). A creep acting on the voltage before the hysteresis would make the fit nonlinear
+//! in the MPIM's memory.
+//!
 //! # The inverse parameterisation
 //! The link is written through its inverse, which is a plain filter of its output `x`:
 //!

@@ -288,7 +288,10 @@ fn duration_section(
             "The paper's trajectory tracked for {:.0} s instead of 20 s, the indices taken on \
              every {:.0} s period; and a {:.0} µm step from rest held for {:.0} s: the error \
              1 s after the step and the largest distance from that position over the rest of \
-             the hold (the drift creep causes). Every approach runs from rest on a fresh stage.",
+             the hold (the drift creep causes). Every approach runs from rest on a fresh stage. \
+             WIHC is not repeated: the exact WIHC solves the same equation as the exact IHC \
+             (eqs. (5) and (9)), so its drive is IHC's to rounding (the tracking runs above give \
+             both the same indices).",
             d.duration_s, d.period_s, d.hold_step_um, d.hold_s
         )],
     );
