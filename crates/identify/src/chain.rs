@@ -661,13 +661,16 @@ fn inverse_chain(
     let advanced: Vec<f64> = (0..n)
         .map(|i| displacement[(i + delay).min(n - 1)])
         .collect();
-    let creep_free: Vec<f64> = match &plant.model.creep {
-        Some(c) => {
-            let mut inverse = c.link(rate)?.inverse();
-            advanced.iter().map(|y| inverse.step(*y)).collect()
-        }
-        None => advanced,
+    let without_creep = |y: &[f64]| -> Result<Vec<f64>, IdentifyError> {
+        Ok(match &plant.model.creep {
+            Some(c) => {
+                let mut inverse = c.link(rate)?.inverse();
+                y.iter().map(|y| inverse.step(*y)).collect()
+            }
+            None => y.to_vec(),
+        })
     };
+    let creep_free = without_creep(&advanced)?;
     let v = decimate(voltage, k);
     let h = decimate(&creep_free, k);
     let end = fitted_end(chain, voltage.len()) / k;
@@ -701,7 +704,19 @@ fn inverse_chain(
     };
     add("hysteresis", &base.model)?;
     if model.creep.is_some() {
-        let creep_only = model.clone().with_links(rate, model.creep.clone(), None)?;
+        // Creep without the delay taken back: an MPIM fitted to the creep-free displacement as
+        // measured (the chain's own MPIM reads it advanced by the delay, and would be judged
+        // against a misaligned record here).
+        let creep_only = if delay == 0 {
+            model.clone().with_links(rate, model.creep.clone(), None)?
+        } else {
+            let h = decimate(&without_creep(displacement)?, k);
+            identify(&v[..end], &h[..end], options)?.model.with_links(
+                rate,
+                model.creep.clone(),
+                None,
+            )?
+        };
         add("+ creep", &creep_only)?;
     }
     if model.vibration.is_some() {
