@@ -547,6 +547,23 @@ fn speed_section(
     Ok(section)
 }
 
+/// The report writes µm where the text summary (and `study.json`) writes um.
+fn micrometres(text: &str) -> String {
+    let mut out = text.to_string();
+    for (from, to) in [
+        (" um ", " µm "),
+        (" um)", " µm)"),
+        (" um,", " µm,"),
+        (" um.", " µm."),
+    ] {
+        out = out.replace(from, to);
+    }
+    match out.strip_suffix(" um") {
+        Some(head) => format!("{head} µm"),
+        None => out,
+    }
+}
+
 fn targets_section(beyond: &BeyondSummary) -> TextSection {
     let met = beyond.checks.iter().filter(|c| c.passed).count();
     let mut section = TextSection::new(
@@ -573,10 +590,10 @@ fn targets_section(beyond: &BeyondSummary) -> TextSection {
             .iter()
             .map(|c| {
                 TableRow::new(
-                    c.what.clone(),
+                    micrometres(&c.what),
                     vec![
                         format!("{:.3}", c.value),
-                        c.bound.clone(),
+                        micrometres(&c.bound),
                         if c.passed { "met" } else { "missed" }.into(),
                     ],
                 )
@@ -585,4 +602,20 @@ fn targets_section(beyond: &BeyondSummary) -> TextSection {
         note: String::new(),
     });
     section
+}
+
+#[cfg(test)]
+mod tests {
+    use super::micrometres;
+
+    #[test]
+    fn um_becomes_micrometres_only_as_a_unit() {
+        assert_eq!(
+            micrometres("drift over a 60 s hold after a 50 um step"),
+            "drift over a 60 s hold after a 50 µm step"
+        );
+        assert_eq!(micrometres("<= 0.1 um"), "<= 0.1 µm");
+        assert_eq!(micrometres("(0.2 um), 3 um."), "(0.2 µm), 3 µm.");
+        assert_eq!(micrometres("uncompensated umbra"), "uncompensated umbra");
+    }
 }
