@@ -6,9 +6,11 @@
 //!   errors a person can act on;
 //! - [`atomic`]: files written atomically (temporary file, then rename);
 //! - [`bounded`]: files read with a bound on their size, checked while reading;
-//! - [`compensator`]: a compensator built from a model file, in physical units.
+//! - [`compensator`]: a compensator built from a model file, in physical units;
+//! - [`bank`]: model sets (many channels' models) and the compensator bank built from one.
 
 pub mod atomic;
+pub mod bank;
 pub mod bounded;
 pub mod compensator;
 pub mod data;
