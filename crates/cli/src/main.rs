@@ -52,10 +52,12 @@ enum Command {
     /// Identify a model from measured (voltage, displacement) samples.
     Identify(commands::identify::Args),
     /// Identify on one record, predict and replay the compensators on another.
-    Crossval(commands::crossval::Args),
+    Crossval(Box<commands::crossval::Args>),
     /// Write a test signal as CSV: the study's excitation, the paper's trajectory, rasters,
     /// steps, multisines, chirps.
     Signal(commands::signal::Args),
+    /// Run a model file over a record: time, input, measured, predicted and error as CSV.
+    Predict(commands::predict::Args),
     /// Drive the simulated stage with a voltage record.
     Simulate(commands::simulate::Args),
     /// Learn from repetition: the next trial's drive from the last trial's measurement
@@ -126,8 +128,9 @@ fn main() -> ExitCode {
         Command::Compensate(args) => run(args, ctx, commands::compensate::run),
         Command::Bench(args) => run(args, ctx, commands::bench::run),
         Command::Identify(args) => run(args, ctx, commands::identify::run),
-        Command::Crossval(args) => run(args, ctx, commands::crossval::run),
+        Command::Crossval(args) => run(&**args, ctx, commands::crossval::run),
         Command::Signal(args) => run(args, ctx, commands::signal::run),
+        Command::Predict(args) => run(args, ctx, commands::predict::run),
         Command::Simulate(args) => run(args, ctx, commands::simulate::run),
         Command::Learn(args) => run(args, ctx, commands::learn::run),
         Command::Reproduce(args) => run(args, ctx, commands::reproduce::run),

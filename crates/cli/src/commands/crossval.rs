@@ -68,6 +68,12 @@ pub struct Args {
     /// or more (they can then ring; by default they are reported as not built, with the gain).
     #[arg(long)]
     pub allow_unstable_delay: bool,
+    /// Also write the models' predictions on the test record to this CSV: time_s (or sample),
+    /// drive, measured displacement, the plant model's predicted displacement and its error,
+    /// the inverse model's predicted drive and its error, and `scored` (0 for the test
+    /// warm-up, 1 for the samples the errors are computed over).
+    #[arg(long, value_name = "OUT.csv")]
+    pub predictions: Option<PathBuf>,
 }
 
 impl NamesFiles for Args {
@@ -77,6 +83,7 @@ impl NamesFiles for Args {
             .input("--test", &self.test)
             .maybe_output("--save-plant", self.save_plant.as_ref())
             .maybe_output("--save-inverse", self.save_inverse.as_ref())
+            .maybe_output("--predictions", self.predictions.as_ref())
     }
 }
 
@@ -204,6 +211,9 @@ pub fn run(args: &Args, ctx: Context) -> Result<(), CliError> {
     }
 
     let report = &cv.report;
+    if let Some(path) = &args.predictions {
+        write_predictions(path, &cv, &test, report.test.warmup, c)?;
+    }
     if ctx.json {
         let output = Output {
             train: args.train.display().to_string(),
@@ -309,4 +319,74 @@ pub fn run(args: &Args, ctx: Context) -> Result<(), CliError> {
         )?;
     }
     Ok(())
+}
+
+/// Writes `--predictions`: both models run over the test record as the validation runs them
+/// (from reset, a creep link settled at the record's start).
+fn write_predictions(
+    path: &std::path::Path,
+    cv: &hystcomp_identify::CrossValidation,
+    test: &super::identify::Loaded,
+    warmup: usize,
+    c: &ColumnArgs,
+) -> Result<(), CliError> {
+    let displacement = cv
+        .plant
+        .predict_settled(&test.voltage)
+        .map_err(|e| CliError::input(e.to_string()))?;
+    let drive = cv
+        .inverse
+        .predict_settled(&test.displacement)
+        .map_err(|e| CliError::input(e.to_string()))?;
+    let error: Vec<f64> = displacement
+        .iter()
+        .zip(&test.displacement)
+        .map(|(p, m)| p - m)
+        .collect();
+    let drive_error: Vec<f64> = drive
+        .iter()
+        .zip(&test.voltage)
+        .map(|(p, m)| p - m)
+        .collect();
+    let scored: Vec<f64> = (0..test.voltage.len())
+        .map(|k| if k < warmup { 0.0 } else { 1.0 })
+        .collect();
+    let index: Vec<f64>;
+    let (time_name, time) = match &test.time {
+        Some(t) => ("time_s", t),
+        None => {
+            index = (1..=test.voltage.len()).map(|k| k as f64).collect();
+            ("sample", &index)
+        }
+    };
+    let (v, d) = (
+        c.voltage_unit.to_lowercase(),
+        c.displacement_unit.to_lowercase(),
+    );
+    let names = [
+        time_name.to_owned(),
+        format!("drive_{v}"),
+        format!("measured_{d}"),
+        format!("predicted_{d}"),
+        format!("error_{d}"),
+        format!("predicted_drive_{v}"),
+        format!("drive_error_{v}"),
+        "scored".to_owned(),
+    ];
+    let header: Vec<&str> = names.iter().map(String::as_str).collect();
+    hystcomp_io::data::write_csv(
+        path,
+        &header,
+        &[
+            time,
+            &test.voltage,
+            &test.displacement,
+            &displacement,
+            &error,
+            &drive,
+            &drive_error,
+            &scored,
+        ],
+    )
+    .map_err(|e| CliError::output(e.to_string()))
 }

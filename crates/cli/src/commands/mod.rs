@@ -7,6 +7,7 @@ pub mod crossval;
 pub mod evaluate;
 pub mod identify;
 pub mod learn;
+pub mod predict;
 pub mod reproduce;
 pub mod signal;
 pub mod simulate;
