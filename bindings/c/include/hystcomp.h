@@ -24,6 +24,12 @@
 #define HYSTCOMP_ALLOW_UNSTABLE_DELAY 1
 
 /**
+ * The most channels a bank holds: 65 536 (`hystcomp_io::bank::MAX_CHANNELS`), checked before
+ * any array is read.
+ */
+#define HYSTCOMP_MAX_CHANNELS 65536
+
+/**
  * The most play operators `hystcomp_identify` accepts (`operators`, or `threshold_count`).
  */
 #define HYSTCOMP_MAX_OPERATORS 1000
@@ -200,6 +206,16 @@ typedef enum HystcompOffsetMode {
      */
     HYSTCOMP_OFFSET_MODE_VALUE = 2,
 } HystcompOffsetMode;
+
+/**
+ * A bank of compensators of one method, one channel per model, stepped together once per
+ * control tick (opaque).
+ *
+ * Created by `hystcomp_bank_from_model_set` or `hystcomp_bank_from_models`, released by
+ * `hystcomp_bank_free`. Channel `c` gives what a `HystcompCompensator` made from its own
+ * model gives, bit for bit.
+ */
+typedef struct HystcompBank HystcompBank;
 
 /**
  * A feedforward compensator: desired position in, drive voltage out (opaque).
@@ -602,6 +618,139 @@ typedef struct HystcompModelValues {
 #ifdef __cplusplus
 extern "C" {
 #endif // __cplusplus
+
+/**
+ * Creates a bank from a model set, in each channel's physical units: desired positions in
+ * (e.g. um), drive voltages out (e.g. V), one per channel.
+ *
+ * - `path`: a model-set file (`{"format": "hystcomp-model-set", ...}`, e.g.
+ *   `models/table1-xyz-set.json`), a directory of model files (one channel per `*.json`, in
+ *   the order of their names) or a single model file (one channel).
+ * - `method`: as `hystcomp_compensator_from_model_file` (`"ihc"`, `"wihc-guarded"`, ...), the
+ *   same for every channel.
+ * - `limits`, `limits_len`: `limits_len` pairs `(v_min, v_max)` in each channel's voltage
+ *   unit, `limits[2 c]` and `limits[2 c + 1]`: 0 pairs (`limits` may be NULL: each channel's
+ *   identified range), 1 pair (every channel) or one pair per channel.
+ * - `flags`: 0 or `HYSTCOMP_ALLOW_UNSTABLE_DELAY`.
+ * - `out`: receives the handle (NULL on failure). Free it with `hystcomp_bank_free`.
+ *
+ * A channel refused (wrong direction, not invertible over its limits, an unstable delayed
+ * loop, creep or vibration links) fails with that channel's status; the message begins with
+ * `channel K (NAME): `.
+ *
+ * # Safety
+ * `path` and `method` must be NUL-terminated strings or NULL; `limits` must point to
+ * `2 * limits_len` doubles or be NULL; `out` must be valid for one write or NULL.
+ */
+int hystcomp_bank_from_model_set(const char *path,
+                                 const char *method,
+                                 const double *limits,
+                                 size_t limits_len,
+                                 int flags,
+                                 struct HystcompBank **out);
+
+/**
+ * Creates a bank from models in memory: `models[c]` is channel `c`'s model
+ * (`hystcomp_model_load`, `hystcomp_model_from_values`, `hystcomp_identify`), `channels` of
+ * them (1 to `HYSTCOMP_MAX_CHANNELS`); the models are copied and may be freed after. The
+ * other arguments are those of `hystcomp_bank_from_model_set`; the channels are named
+ * `channel_0`, `channel_1`, ... in messages.
+ *
+ * # Safety
+ * `models` must point to `channels` live model handles (or be NULL); `method` a
+ * NUL-terminated string or NULL; `limits` `2 * limits_len` doubles or NULL; `out` valid for
+ * one write or NULL.
+ */
+int hystcomp_bank_from_models(const struct HystcompModel *const *models,
+                              size_t channels,
+                              const char *method,
+                              const double *limits,
+                              size_t limits_len,
+                              int flags,
+                              struct HystcompBank **out);
+
+/**
+ * Writes the number of channels to `*channels`.
+ *
+ * # Safety
+ * `h` must be a live handle or NULL; `channels` valid for one write or NULL.
+ */
+int hystcomp_bank_channels(const struct HystcompBank *h, size_t *channels);
+
+/**
+ * One control tick: `v[c]` is the drive for the desired position `y_d[c]` of channel `c`,
+ * `channels` values each (the bank's channel count; another count is refused). `y_d` and `v`
+ * may be the same array (in place); they must not otherwise overlap.
+ *
+ * Every `v[c]` lies within its channel's limits and is never NaN. A NaN or infinite `y_d[c]`
+ * holds channel `c`'s previous drive; the tick is still done for every channel and
+ * `HYSTCOMP_STATUS_NON_FINITE_INPUT` is returned. Never allocates on success.
+ *
+ * # Safety
+ * `h` must be a live handle or NULL; `y_d` and `v` must point to `channels` doubles (or be
+ * NULL).
+ */
+int hystcomp_bank_step(struct HystcompBank *h, const double *y_d, double *v, size_t channels);
+
+/**
+ * A whole signal of `samples` ticks, row-major: `y_d[k * channels + c]` is channel `c` at
+ * tick `k` (a C array `double y_d[samples][channels]`), and `v` the same for the drives; as
+ * `samples` calls of `hystcomp_bank_step`. `y_d` and `v` may be the same array. With
+ * `samples == 0` nothing is done and the arrays may be NULL.
+ *
+ * # Safety
+ * `h` must be a live handle or NULL; `y_d` and `v` must point to `samples * channels`
+ * doubles (or be NULL).
+ */
+int hystcomp_bank_process(struct HystcompBank *h,
+                          const double *y_d,
+                          double *v,
+                          size_t samples,
+                          size_t channels);
+
+/**
+ * Every channel back to its initial state (operators' memory zero, eq. (1); previous drive 0
+ * clamped into the limits; diagnostics cleared).
+ *
+ * # Safety
+ * `h` must be a live handle or NULL.
+ */
+int hystcomp_bank_reset(struct HystcompBank *h);
+
+/**
+ * Writes channel `channel`'s drive limits `[*v_min, *v_max]` (its model's voltage unit).
+ *
+ * # Safety
+ * `h` must be a live handle or NULL; `v_min` and `v_max` valid for one write or NULL.
+ */
+int hystcomp_bank_limits(const struct HystcompBank *h,
+                         size_t channel,
+                         double *v_min,
+                         double *v_max);
+
+/**
+ * Writes channel `channel`'s counters since the last reset: ticks whose desired position
+ * could not be reached within the limits (`*saturated`), ticks a delayed loop drove to a
+ * limit although the position was reachable (`*loop_saturated`), NaN or infinite desired
+ * positions (`*non_finite`). Any pointer may be NULL when that counter is not wanted.
+ *
+ * # Safety
+ * `h` must be a live handle or NULL; the counters valid for one write or NULL.
+ */
+int hystcomp_bank_diagnostics(const struct HystcompBank *h,
+                              size_t channel,
+                              uint64_t *saturated,
+                              uint64_t *loop_saturated,
+                              uint64_t *non_finite);
+
+/**
+ * Releases a bank. NULL is accepted (and ignored); a handle must not be used after, nor
+ * freed twice.
+ *
+ * # Safety
+ * `h` must be a live handle from this library or NULL.
+ */
+void hystcomp_bank_free(struct HystcompBank *h);
 
 /**
  * Creates a compensator from a model in memory, in its physical units: desired position in,

@@ -67,7 +67,7 @@ impl From<CompensatorError> for Failure {
     }
 }
 
-fn model_file_status(e: &ModelFileError) -> HystcompStatus {
+pub(crate) fn model_file_status(e: &ModelFileError) -> HystcompStatus {
     match e {
         ModelFileError::Io { .. } | ModelFileError::Write(_) => HystcompStatus::Io,
         _ => HystcompStatus::InvalidModelFile,

@@ -11,9 +11,9 @@
 //! indices are `hystcomp_indices`. Nothing is re-implemented here.
 //!
 //! One module per job: `compensator` and `compensate` (compensators, from files, parameters or
-//! models, and the one-shot compensation), `mpim` (forward models), `model` (models in memory:
-//! files, values), `identify`, `indices`, `info` (messages, version); `boundary` and `args` hold
-//! the checks every entry point shares.
+//! models, and the one-shot compensation), `bank` (many channels in one handle), `mpim`
+//! (forward models), `model` (models in memory: files, values), `identify`, `indices`, `info`
+//! (messages, version); `boundary` and `args` hold the checks every entry point shares.
 //!
 //! The header `include/hystcomp.h` is generated from these files by cbindgen
 //! (`bindings/c/cbindgen.toml`) and committed; a test fails when it is stale. Regenerate it with
@@ -25,7 +25,8 @@
 //! - On failure, `hystcomp_last_error_message()` gives the reason, in English, for people. It is
 //!   **thread-local** and describes the most recent failed call on the calling thread; successful
 //!   calls leave it unchanged.
-//! - Objects are opaque handles (`HystcompCompensator*`, `HystcompMpim*`, `HystcompModel*`)
+//! - Objects are opaque handles (`HystcompCompensator*`, `HystcompBank*`, `HystcompMpim*`,
+//!   `HystcompModel*`)
 //!   created by a `*_from_*`, `*_load` or `hystcomp_identify` function and released by the
 //!   matching `*_free` (which accepts NULL). A handle may be moved between threads but must not
 //!   be used by two threads at once (a model, which never changes, may be read by several).
@@ -64,6 +65,7 @@
 #![warn(missing_docs)]
 
 mod args;
+mod bank;
 mod boundary;
 mod compensate;
 mod compensator;
@@ -73,6 +75,7 @@ mod info;
 mod model;
 mod mpim;
 
+pub use bank::*;
 pub use compensate::*;
 pub use compensator::*;
 pub use identify::*;
