@@ -89,6 +89,37 @@ fn reproduce_prints_table3_writes_the_report_and_honours_json() {
         assert!(out.join(format!("{stem}.png")).is_file(), "{stem}");
         assert!(html.contains(&format!("{stem}.png")), "{stem} not shown");
     }
+    // The learning study (issue 12): four series (the paper's trajectory and the raster, from
+    // the exact and the full pipeline's IHC), their laws and the issue's figures, a section
+    // with its tables and figures.
+    let learning = &json["learning"];
+    let series = learning["series"].as_array().unwrap();
+    assert_eq!(series.len(), 4);
+    for s in series {
+        assert!(s["trials"].as_array().unwrap().len() >= 2, "{s}");
+        assert!(s["law"]["gain"].as_f64().unwrap() > 0.0);
+    }
+    assert_eq!(learning["checks"].as_array().unwrap().len(), 4);
+    assert_eq!(file["learning"], json["learning"]);
+    for id in [
+        "learning",
+        "learning-trials",
+        "learning-last",
+        "learning-checks",
+    ] {
+        assert!(
+            html.contains(&format!("id=\"{id}\"")),
+            "no {id} in the report"
+        );
+    }
+    for stem in ["figS_learning_paper", "figS_learning_raster"] {
+        assert!(out.join(format!("{stem}.png")).is_file(), "{stem}");
+        assert!(html.contains(&format!("{stem}.png")), "{stem} not shown");
+    }
+    let trial0 = series[0]["trials"][0]["indices"]["e_rms_percent"]
+        .as_f64()
+        .unwrap();
+    assert!(html.contains(&format!("{trial0:.4} %")), "{trial0}");
     // The report's numbers are the JSON's: the full IHC's e_rms and the first check's value.
     let e_rms = beyond["full"]["runs"][0][1]["e_rms_percent"]
         .as_f64()

@@ -17,7 +17,7 @@ use crate::study::Study;
 
 /// The style of an approach by its label (`exact / ihc`, `full / dihc`, `uncompensated`):
 /// the compensator's colour; the `exact` pipeline dotted beside the `full` one's solid line.
-fn style_of(label: &str) -> SeriesStyle {
+pub(crate) fn style_of(label: &str) -> SeriesStyle {
     let (pipeline, approach) = label.split_once(" / ").unwrap_or(("", label));
     let style = SeriesStyle::of_approach(approach).unwrap_or(SeriesStyle::IHC);
     if pipeline == "exact" {
@@ -27,7 +27,7 @@ fn style_of(label: &str) -> SeriesStyle {
     }
 }
 
-fn entry(files: &FigureFiles, caption: String) -> FigureEntry {
+pub(crate) fn entry(files: &FigureFiles, caption: String) -> FigureEntry {
     let name = |path: &Path| {
         path.file_name()
             .map(|n| n.to_string_lossy().into_owned())

@@ -12,7 +12,7 @@
 //! learn it.
 
 use hystcomp_learn::{LearnError, Learner, Update};
-use hystcomp_stage::{ClampCounts, Stage, StageConfig, StageError};
+use hystcomp_stage::{ClampCounts, Stage, StageConfig, StageError, feasibility};
 use serde::Serialize;
 
 /// The most periods one simulated trial plays.
@@ -69,8 +69,12 @@ pub struct SimulatedTrial {
     /// What the stage clamped or slewed in this trial.
     #[serde(skip)]
     pub clamps: ClampCounts,
-    /// Samples during which the amplifier slewed at its current limit.
+    /// Samples during which the amplifier slewed at its current limit (the whole trial).
     pub slew_limited: u64,
+    /// Share of the measured period's samples in which the amplifier was at its slew or rail
+    /// limit (`hystcomp_stage::feasibility` over the trial's drive): where it is large, the
+    /// amplifier, not the learning, limits the error.
+    pub limited_share: f64,
 }
 
 /// Checks `trials` and `periods` against the bounds before anything runs.
@@ -124,6 +128,8 @@ pub fn run_trials(
             .collect();
         let response = Stage::new(stage, seed.wrapping_add(trial as u64))?.run(&drive);
         let start = drive.len() - n;
+        let limited = feasibility(stage, &drive)?.limited_samples()
+            - feasibility(stage, &drive[..start])?.limited_samples();
         let measured = &response.measured_position_um[start..];
         let truth = &response.true_position_um[start..];
         let noise = (measured
@@ -139,6 +145,7 @@ pub fn run_trials(
             noise_floor_percent: noise / (hi - lo) * 100.0,
             clamps: response.clamps,
             slew_limited: response.clamps.slew_limited,
+            limited_share: limited as f64 / n as f64,
         };
         watch(&record);
         let stopped = learner.is_stopped();

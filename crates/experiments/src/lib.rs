@@ -17,6 +17,8 @@ pub mod excitation;
 pub mod figures;
 pub mod full;
 pub mod learning;
+mod learning_report;
+pub mod learning_study;
 pub mod reference;
 pub mod report;
 pub mod signals;

@@ -315,6 +315,8 @@ pub struct Study {
     pub duration: DurationStudy,
     /// The speed study: the paper's trajectory time-compressed, and triangle rasters.
     pub speed: SpeedStudy,
+    /// The learning study: e_rms against trial number when the motion repeats (issue 12).
+    pub learning: crate::learning_study::LearningStudy,
     /// The cross runs: particle swarm models with exact inverses, least-squares models with
     /// delayed ones (IHC and WIHC each).
     pub cross_runs: Vec<TrackingRun>,
@@ -859,6 +861,15 @@ pub fn run_study(
     observer.begin("speed", 1);
     let speed = run_speed(&options.stage, tracking_seed, &approaches(true), full_scale)?;
     observer.end();
+    // 7. Learning from repetition, from the exact and the full pipeline's IHC.
+    observer.begin("learning", 1);
+    let learning = crate::learning_study::run_learning(
+        &options.stage,
+        tracking_seed,
+        &exact_plant.model,
+        &full_plant.model,
+    )?;
+    observer.end();
 
     let record_s = record.command_v.len() as f64 / fs;
     let mut runs = runs.into_iter();
@@ -909,6 +920,7 @@ pub fn run_study(
         },
         duration,
         speed,
+        learning,
         cross_runs,
         noise_floor: floor,
         ablations,

@@ -54,6 +54,9 @@ pub struct StudySummary {
     /// Beyond the paper: the `full` pipeline, the duration and speed studies and issue 11's
     /// targets ([`crate::beyond`]).
     pub beyond: crate::beyond::BeyondSummary,
+    /// The learning study (issue 12): e_rms against trial number, the laws, issue 12's
+    /// acceptance figures ([`crate::learning_study`]).
+    pub learning: crate::learning_study::LearningStudy,
 }
 
 /// A CSV file of the report's directory with series the figures show, to replot them.
@@ -254,6 +257,7 @@ pub fn summarize(study: &Study) -> StudySummary {
         identification_holdout: 0.0,
         series: Vec::new(),
         beyond: crate::beyond::summarize_beyond(study),
+        learning: study.learning.clone(),
     }
 }
 
@@ -357,7 +361,8 @@ impl fmt::Display for StudySummary {
                 a.label, a.ihc.e_mhe_percent, a.ihc.e_rms_percent
             )?;
         }
-        write!(f, "{}", self.beyond)
+        write!(f, "{}", self.beyond)?;
+        write!(f, "{}", self.learning)
     }
 }
 
@@ -1480,6 +1485,9 @@ pub fn write_outputs(
     let (beyond_sections, beyond_figures) =
         crate::beyond_report::beyond_sections(study, &summary.beyond, dir)?;
     figures.extend(beyond_figures);
+    let (learning_section, learning_figures) =
+        crate::learning_report::learning_section(&summary.learning, dir)?;
+    figures.extend(learning_figures);
 
     // The report.
     let times = study.identification_times_s;
@@ -1595,6 +1603,7 @@ pub fn write_outputs(
         sections: explanations(study)
             .into_iter()
             .chain(beyond_sections)
+            .chain(std::iter::once(learning_section))
             .collect(),
         stage_config_toml: study.options.stage.to_toml_string(),
     };

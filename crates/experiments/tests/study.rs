@@ -9,6 +9,8 @@ use hystcomp_experiments::{RunMeta, StudyOptions, run_study, summarize, write_ou
 
 #[path = "study/beyond.rs"]
 mod beyond;
+#[path = "study/learning.rs"]
+mod learning;
 use hystcomp_io::model_file::ModelFile;
 
 /// The HTML of the table with the given id.
@@ -34,6 +36,7 @@ fn default_study_meets_the_acceptance_bounds_and_writes_a_report_chromium_shows(
     beyond::the_full_pipeline_and_the_duration_and_speed_studies_measure_what_they_claim(
         &study, &summary,
     );
+    learning::the_learning_study_measures_what_it_claims(&study, &summary);
     // Acceptance on the default stage: the exact pipeline cuts e_mhe from about 13 % to <= 3 %
     // with e_rms <= 0.75 %.
     let exact = study.pipeline("exact").unwrap();
@@ -72,9 +75,9 @@ fn default_study_meets_the_acceptance_bounds_and_writes_a_report_chromium_shows(
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("report");
     let files = write_outputs(&study, &out, &meta(), &mut Silent).unwrap();
-    // Fifteen figures of the paper's study and six beyond it (the full pipeline, the duration
-    // and speed studies), each a PNG and an SVG.
-    assert_eq!(files.figures.len(), 2 * (15 + 6));
+    // Fifteen figures of the paper's study, six beyond it (the full pipeline, the duration
+    // and speed studies) and two of the learning study, each a PNG and an SVG.
+    assert_eq!(files.figures.len(), 2 * (15 + 6 + 2));
     // Every figure of a pipeline names it in its title; fig. 12 has a readable twin.
     for pipeline in ["exact", "paper"] {
         for stem in [

@@ -483,7 +483,7 @@ class Learner:
     - ``drive``: the drive of the first trial, if not the exact inverse's own (any
       compensator's, or an earlier learner's): the reference is recovered from it by the model;
     - ``gain`` (``gamma``, default 0.8, at most 10), ``bandwidth_hz`` (``Q``'s cut-off; default
-      a hundredth of the sample rate, a quarter for a model with a vibration link),
+      a hundredth of the sample rate, a tenth for a model with a vibration link),
       ``filter_order`` (1 to 8, default 4), ``lead_samples`` (``m``, 0 to 1000),
       ``divergence_factor`` (above 1, default 1.5), ``inverse`` (``"ihc"`` or ``"wihc"``),
       ``limits`` (``(min, max)`` drive limits, by default the model's identified range),

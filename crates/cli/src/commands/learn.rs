@@ -71,7 +71,7 @@ pub struct Args {
     #[arg(long, default_value_t = DEFAULT_GAIN)]
     gain: f64,
     /// Cut-off of the zero-phase robustness filter Q, Hz [default: a hundredth of the sample
-    /// rate, a quarter with a model that has a vibration link].
+    /// rate, a tenth with a model that has a vibration link].
     #[arg(long, value_name = "HZ")]
     bandwidth: Option<f64>,
     /// Order of Q (1-8).
