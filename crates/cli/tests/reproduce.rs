@@ -562,3 +562,60 @@ fn compensate_simulate_evaluate_chain_tracks_the_paper_trajectory() {
     let e_rms = json["e_rms_percent"].as_f64().unwrap();
     assert!(e_mhe <= 3.0 && e_rms <= 0.75, "{json}");
 }
+
+/// Issue 10's stage with a bigger, reversed-asymmetry Preisach loop
+/// (`crates/stage/stages/big-reversed-loop.toml`): `reproduce --stage` runs, and the `paper`
+/// pipeline's delayed loops are either stable (its swarm holds both gains to at most 0.9) or
+/// refused with the reason and run guarded; no delayed run clamps (a ringing loop would).
+#[test]
+fn reproduce_on_the_big_reversed_loop_stage_keeps_the_delayed_loops_stable() {
+    let stage = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../stage/stages/big-reversed-loop.toml");
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("r");
+    let o = hystcomp(&[
+        "--json",
+        "reproduce",
+        "--stage",
+        s(&stage),
+        "--output",
+        s(&out),
+        "--pso-iterations",
+        "30",
+        "--no-check",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let doc: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    // The loop is bigger than the built-in stage's (12.8 %).
+    let uncompensated = doc["uncompensated"]["indices"]["e_mhe_percent"]
+        .as_f64()
+        .or_else(|| doc["uncompensated"]["e_mhe_percent"].as_f64())
+        .unwrap_or_else(|| panic!("{}", doc["uncompensated"]));
+    assert!(uncompensated > 18.0, "{uncompensated}");
+    let plant = hystcomp_io::model_file::ModelFile::load(&out.join("models/paper-plant.json"))
+        .unwrap()
+        .model()
+        .unwrap();
+    let gains = [
+        plant.delayed_ihc_loop_gain(0.0, 1.0).unwrap().gain,
+        plant.delayed_wihc_loop_gain(0.0, 1.0).unwrap().gain,
+    ];
+    let paper = doc["pipelines"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|p| p["name"] == "paper")
+        .unwrap();
+    let mut delayed = 0;
+    for (run, gain) in paper["runs"].as_array().unwrap().iter().zip(gains) {
+        let label = run["label"].as_str().unwrap();
+        if !label.contains("delayed") {
+            continue;
+        }
+        delayed += 1;
+        let refused = run["note"].as_str().is_some_and(|n| n.contains("refused"));
+        assert!(gain < 1.0 || refused, "{label}: gain {gain}, {run}");
+        assert_eq!(run["saturated"], 0, "{label}: {run}");
+    }
+    assert_eq!(delayed, 2, "{paper}");
+}

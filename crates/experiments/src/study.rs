@@ -24,8 +24,8 @@ use std::time::Instant;
 
 use hystcomp_core::CoreError;
 use hystcomp_identify::{
-    Identification, IdentifyError, IdentifyOptions, Method as Solver, Progress, PsoOptions,
-    Thresholds, Warmup, identify_observed,
+    DEFAULT_DELAYED_LOOP_BOUND, Identification, IdentifyError, IdentifyOptions, Method as Solver,
+    Progress, PsoOptions, Thresholds, Warmup, identify_observed,
 };
 use hystcomp_io::compensator::{CompensatorError, Method, ScaledCompensator};
 use hystcomp_io::model_file::{Direction, ModelFile};
@@ -471,9 +471,15 @@ pub fn run_study(
                    slot: usize,
                    observer: &mut dyn StudyObserver|
      -> Result<(Identification, Vec<f64>), StudyError> {
+        // The paper pipeline's plant model drives the one-sample-delayed loops: the swarm
+        // holds both delayed loops' gains to at most the default bound (as a penalty), so that
+        // they are stable by construction on any stage (issue 10).
+        let for_delayed =
+            matches!(solver, Solver::ParticleSwarm(_)) && direction == Direction::Plant;
         let opts = IdentifyOptions {
             direction,
             method: solver.clone(),
+            delayed_loop_bound: for_delayed.then_some(DEFAULT_DELAYED_LOOP_BOUND),
             ..base.clone()
         };
         let total = match &solver {
@@ -491,11 +497,22 @@ pub fn run_study(
                 convergence.push(p.best_cost * 100.0);
             }
         };
-        let result =
-            identify_observed(&v, &y, &opts, &mut watch).map_err(|error| StudyError::Identify {
-                model: name.to_string(),
-                error,
-            });
+        let result = match identify_observed(&v, &y, &opts, &mut watch) {
+            // A swarm cut short may find no model within the bound: the model without it,
+            // whose plain delayed loops are then refused and run guarded, with a note.
+            Err(IdentifyError::SwarmInfeasible { .. }) if for_delayed => {
+                let unbounded = IdentifyOptions {
+                    delayed_loop_bound: None,
+                    ..opts.clone()
+                };
+                identify_observed(&v, &y, &unbounded, &mut watch)
+            }
+            other => other,
+        }
+        .map_err(|error| StudyError::Identify {
+            model: name.to_string(),
+            error,
+        });
         times[slot] = t.elapsed().as_secs_f64();
         observer.end();
         result.map(|id| (id, convergence))
