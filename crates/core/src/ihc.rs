@@ -1,5 +1,6 @@
 //! Inverse hysteresis compensation (IHC), eqs. (5)-(8).
 
+use crate::buffer::copied;
 use crate::compensator::OutputGuard;
 use crate::invertibility::DelayedLoop;
 use crate::solve::{OddCubic, Remainder, increasing_root};
@@ -82,7 +83,14 @@ impl<T: Real, B: Buffer<T>> Ihc<T, B> {
         mode: SolveMode,
     ) -> Result<Self, CoreError> {
         plant.check_invertible(limits.min(), limits.max())?;
-        let inverse = plant.pi_part_inverse()?;
+        // The walk runs eq. (7)'s inverse with a single zero-threshold operator folded into the
+        // linear term (`Mpim::pi_part_inverse_folded`), which keeps the segment slopes accurate
+        // when a2 is small beside b_1; `pi_part_inverse` reports the literal form.
+        let inverse = if folds(plant.thresholds(), plant.a2()) {
+            plant.pi_part_inverse_folded()?
+        } else {
+            plant.pi_part_inverse()?
+        };
         let gains = plant.delayed_gain_range(DelayedLoop::Ihc, limits.min(), limits.max());
         // NaN counts as unstable.
         if mode == SolveMode::Delayed && (gains.worst.gain >= T::one() || gains.worst.gain.is_nan())
@@ -130,15 +138,35 @@ impl<T: Real, B: Buffer<T>> Ihc<T, B> {
     /// The inverse PI part `P1^{-1}` of eq. (7) this compensator runs, as a model (`a1 = 0`):
     /// thresholds `r_hat_j`, weights `b_hat_j`, `a2 = a2_hat`, and its current memory.
     pub fn pi_part_inverse(&self) -> Result<Mpim<T, B>, CoreError> {
+        let a2 = self.input.a2();
+        let mut weights: B = copied(self.inverse.weights())?;
+        let mut a_hat = self.inverse.a();
+        if folds(self.inverse.thresholds(), a2) {
+            // Unfolded: a2_hat = 1 / a2 and b_hat_1 = 1 / (a2 + b_1) - 1 / a2, the very values
+            // `Mpim::pi_part_inverse` computes (the folded a2_hat is 1 / (a2 + b_1)).
+            let literal = T::one() / a2;
+            if let Some(b) = weights.as_mut().first_mut() {
+                *b = a_hat - literal;
+            }
+            a_hat = literal;
+        }
         let mut model = Mpim::new(
             self.inverse.thresholds(),
-            self.inverse.weights(),
+            weights.as_ref(),
             T::zero(),
-            self.inverse.a(),
+            a_hat,
         )?;
         model.set_memory(self.inverse.memory())?;
         Ok(model)
     }
+}
+
+/// Whether IHC runs eq. (7)'s inverse folded (see [`Ihc::new`]): exactly one operator of zero
+/// threshold and `a2 > 0` (otherwise `Mpim::pi_part_inverse` folds already, or has nothing
+/// to fold). The inverse's thresholds are zero where the plant's are.
+fn folds<T: Real>(thresholds: &[T], a2: T) -> bool {
+    let always = thresholds.iter().take_while(|r| **r <= T::zero()).count();
+    always == 1 && a2 > T::zero()
 }
 
 /// Exact IHC on one segment where `P1^{-1}[w] = alpha w + beta`:

@@ -201,3 +201,44 @@ fn an_f32_ihc_between_its_limits_keeps_reproducing_y_d() {
         panic!("{violation}");
     }
 }
+
+/// Found by the fuzz target `compensators` (10 minutes, `fuzz/corpus/compensators/
+/// a2-small-beside-b1`): an f32 model with `a2 = 2.4e-6` beside a zero-threshold weight of 0.1.
+/// Eq. (7)'s inverse then has `a_hat = 1 / a2 = 4.1e5` and a first weight of nearly `-4.1e5`,
+/// and the segment slopes summed from them lost 2.5 % in f32: after a clamp at the upper limit
+/// the exact IHC answered `y_d = 0` with `P[v] = 0.109`, uncounted. The compensator's bank folds
+/// the zero-threshold operators into its linear term.
+#[test]
+fn an_f32_ihc_with_a_small_a2_beside_its_zero_threshold_weight_stays_exact() {
+    let thresholds: [f32; 8] = [
+        0.0,
+        2.982_459_6e-6,
+        4.216_294_5e-5,
+        0.021_737_285,
+        0.031_256_18,
+        0.208_609_54,
+        0.376_870_96,
+        0.624_927_16,
+    ];
+    let weights: [f32; 8] = [
+        0.104_208_95,
+        0.127_792_97,
+        0.605_151_1,
+        0.602_491_14,
+        10.0,
+        0.104_208_95,
+        0.127_792_97,
+        -1.663_857_8,
+    ];
+    let model = Mpim::new(&thresholds, &weights, 0.000_106_971_94, 2.430_505_2e-6).unwrap();
+    let limits = OutputLimits::new(-3.051_757_8e-5, 0.104_208_95).unwrap();
+    let subject = Subject {
+        model,
+        limits,
+        moderate: true,
+    };
+    let desired = [9.145_124e36, f32::NAN, -0.0, 0.05, 0.3, 0.0];
+    if let Err(violation) = check_plant_compensators(&subject, &desired) {
+        panic!("{violation}");
+    }
+}
