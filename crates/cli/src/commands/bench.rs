@@ -33,6 +33,10 @@ pub struct Args {
     /// model, IHC and WIHC; an inverse model times DIHC.
     #[arg(long, value_name = "FILE")]
     model: Option<PathBuf>,
+    /// Time the compensator banks instead, for these channel counts (comma-separated, each 1
+    /// to 65536, e.g. 1,8,64,1024,4096): cost per channel-step of every method, f64 and f32.
+    #[arg(long, value_name = "C,...", value_delimiter = ',')]
+    channels: Option<Vec<usize>>,
 }
 
 impl NamesFiles for Args {
@@ -82,7 +86,7 @@ struct Report {
 }
 
 /// Median and minimum of `repeats` timed runs of `run`, in ns per sample.
-fn time(samples: usize, repeats: usize, mut run: impl FnMut()) -> (f64, f64) {
+pub(super) fn time(samples: usize, repeats: usize, mut run: impl FnMut()) -> (f64, f64) {
     run(); // warm up caches and branch predictors
     let mut per_sample: Vec<f64> = (0..repeats)
         .map(|_| {
@@ -322,6 +326,9 @@ pub fn run(args: &Args, ctx: Context) -> Result<(), CliError> {
         1..=MAX_REPEATS,
         "timed runs (the default is 15)",
     )?;
+    if let Some(channels) = &args.channels {
+        return super::bench_bank::run(channels, args.samples, args.repeats, ctx);
+    }
     let user_model = args.model.as_deref().map(ModelFile::load).transpose()?;
     let mut bench = Bench {
         samples: args.samples,

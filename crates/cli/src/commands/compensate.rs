@@ -1,4 +1,7 @@
-//! `hystcomp compensate`: a desired trajectory through a compensator, CSV in, CSV out.
+//! `hystcomp compensate`: a desired trajectory through a compensator, CSV in, CSV out; with a
+//! model set, a multi-column trajectory through a bank (module `bank`).
+
+mod bank;
 
 use std::path::PathBuf;
 
@@ -15,7 +18,8 @@ use crate::{CliError, Context};
 /// Arguments of `hystcomp compensate`.
 #[derive(Debug, clap::Args)]
 pub struct Args {
-    /// Model file (JSON): a plant model for ihc / wihc, an inverse model for dihc.
+    /// Model file (JSON): a plant model for ihc / wihc, an inverse model for dihc. A model set
+    /// (a model-set file or a directory of model files) compensates one column per channel.
     #[arg(long, value_name = "FILE")]
     model: PathBuf,
     /// Compensator: ihc, wihc (exact solves), ihc-delayed, wihc-delayed (one-sample-delayed
@@ -37,6 +41,11 @@ pub struct Args {
     /// Desired position column of the trajectory, by name or 1-based index.
     #[arg(long, default_value = "2", value_name = "COLUMN")]
     desired_column: Column,
+    /// With a model set: the desired position columns, one per channel in the set's order
+    /// (comma-separated names or 1-based indices). Default: the columns named after the
+    /// channels if the file has them all, else the consecutive columns from --desired-column.
+    #[arg(long, value_name = "COLUMN,...", value_delimiter = ',')]
+    desired_columns: Option<Vec<Column>>,
     /// Field delimiter of the trajectory file: auto, comma, tab, semicolon or whitespace.
     #[arg(long, default_value = "auto")]
     delimiter: Delimiter,
@@ -144,6 +153,14 @@ struct Report {
 
 /// Runs `hystcomp compensate`.
 pub fn run(args: &Args, ctx: Context) -> Result<(), CliError> {
+    if hystcomp_io::bank::is_model_set(&args.model) {
+        return bank::run(args, ctx);
+    }
+    if args.desired_columns.is_some() {
+        return Err(CliError::input(
+            "--desired-columns needs a model set (one model per column) as --model; give              --desired-column for one model",
+        ));
+    }
     let model = ModelFile::load(&args.model)?;
     if let Some(p) = args.preview {
         crate::bounds::count(

@@ -1,6 +1,7 @@
 //! One module per subcommand; each has an `Args` (clap) and a `run`.
 
 pub mod bench;
+pub mod bench_bank;
 pub mod chain_args;
 pub mod compensate;
 pub mod crossval;

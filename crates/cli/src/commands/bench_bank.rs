@@ -1,0 +1,228 @@
+//! `hystcomp bench --channels C,...`: the cost per channel-step of the compensator banks
+//! (issue 16): `C` channels of ten operators, each its own model (Table 1 or 2 of the paper,
+//! weights scaled by a factor of its own in [0.9, 1.1]) and its own phase of the paper's
+//! trajectory, stepped tick after tick.
+//!
+//! Each figure is the median over repeated runs of a whole signal, divided by its ticks times
+//! its channels. The criterion benches (`cargo bench -p hystcomp-core --bench bank`) measure
+//! the same with statistics.
+
+use std::hint::black_box;
+
+use hystcomp_core::{
+    CompensatorBank, DihcBank, Heap, IhcBank, Mpim, OutputLimits, Real, SolveMode, WihcBank,
+    paper::{self, PublishedMpim},
+};
+use serde::Serialize;
+
+use super::bench::time;
+use crate::{CliError, Context};
+
+/// Most channels per bank (`--channels`), as many as a model set may hold.
+pub const MAX_BENCH_CHANNELS: usize = hystcomp_io::bank::MAX_CHANNELS;
+
+/// Operators of every channel.
+const OPERATORS: usize = 10;
+
+/// One measured figure.
+#[derive(Debug, Clone, Serialize)]
+struct Figure {
+    /// `ihc`, `ihc-delayed`, `ihc-guarded`, `wihc`, `wihc-delayed`, `wihc-guarded` or `dihc`.
+    what: &'static str,
+    channels: usize,
+    operators: usize,
+    /// `f64` or `f32`.
+    precision: &'static str,
+    /// Ticks per timed run.
+    ticks: usize,
+    /// Median cost per channel-step, ns.
+    median_ns_per_channel_step: f64,
+    /// Fastest run, ns per channel-step.
+    min_ns_per_channel_step: f64,
+}
+
+#[derive(Debug, Serialize)]
+struct Report {
+    repeats: usize,
+    figures: Vec<Figure>,
+}
+
+/// `table` spread over [`OPERATORS`] operators, weights scaled by `1 + 0.1 s` for a channel's
+/// own `s` in [-1, 1].
+fn channel_model<T: Real>(
+    table: &PublishedMpim,
+    channel: usize,
+) -> Result<Mpim<T, Vec<T>>, CliError> {
+    let base: Mpim<T, Vec<T>> = table.spread(OPERATORS)?;
+    let s = ((channel as f64) * 0.618_034).fract() * 2.0 - 1.0;
+    let scale = T::from_f64(1.0 + 0.1 * s);
+    let weights: Vec<T> = base.weights().iter().map(|&b| b * scale).collect();
+    Ok(Mpim::new(
+        base.thresholds(),
+        &weights,
+        base.a1(),
+        base.a2(),
+    )?)
+}
+
+/// `ticks x channels` desired positions: each channel a three-tone voltage at its own phase
+/// (rising smoothly from rest over the first quarter) through its own plant.
+fn signal<T: Real>(plants: &[Mpim<T, Vec<T>>], ticks: usize) -> Vec<T> {
+    let channels = plants.len();
+    let mut out = vec![T::zero(); ticks * channels];
+    for (c, plant) in plants.iter().enumerate() {
+        let mut p = plant.clone();
+        let phase = c as f64 * 0.37;
+        for k in 0..ticks {
+            let t = k as f64 / ticks as f64 * 4.0;
+            let rise = 0.5 - 0.5 * (std::f64::consts::PI * t.min(1.0)).cos();
+            let v = 0.5
+                + 0.14 * (std::f64::consts::PI * t + 2.6 + phase).sin()
+                + 0.14 * (1.6 * std::f64::consts::PI * t + 3.0 + phase).sin()
+                + 0.2 * (2.0 * std::f64::consts::PI * t + 1.5 + phase).sin();
+            out[k * channels + c] = p.step(T::from_f64(rise * v));
+        }
+    }
+    out
+}
+
+/// Times every bank kind for `channels` channels in `T`.
+fn bank<T: Real>(
+    figures: &mut Vec<Figure>,
+    channels: usize,
+    samples: usize,
+    repeats: usize,
+    precision: &'static str,
+) -> Result<(), CliError> {
+    // At least 50 ticks, and about `samples` channel-steps per run.
+    let ticks = (samples / channels).max(50);
+    let plants = (0..channels)
+        .map(|c| channel_model::<T>(&paper::TABLE1, c))
+        .collect::<Result<Vec<_>, _>>()?;
+    let inverses = (0..channels)
+        .map(|c| channel_model::<T>(&paper::TABLE2, c))
+        .collect::<Result<Vec<_>, _>>()?;
+    let desired = signal(&plants, ticks);
+    let mut control = vec![T::zero(); desired.len()];
+    let limits = [OutputLimits::new(T::zero(), T::one())?];
+    let bank_error = |e: hystcomp_core::BankError| CliError::input(e.to_string());
+    // The plain delayed loops are timed even where their loop gain is 1 or more (Table 1's
+    // WIHC: 1.66), as the single-channel figures are: the signal rises from rest.
+    let unchecked = SolveMode::DelayedAllowUnstable;
+    let guarded = SolveMode::DelayedGuarded;
+    let banks: [(&'static str, Box<dyn CompensatorBank<T>>); 7] = [
+        (
+            "ihc",
+            Box::new(
+                IhcBank::<T, Heap>::new(&plants, &limits, SolveMode::Exact).map_err(bank_error)?,
+            ),
+        ),
+        (
+            "ihc-delayed",
+            Box::new(IhcBank::<T, Heap>::new(&plants, &limits, unchecked).map_err(bank_error)?),
+        ),
+        (
+            "ihc-guarded",
+            Box::new(IhcBank::<T, Heap>::new(&plants, &limits, guarded).map_err(bank_error)?),
+        ),
+        (
+            "wihc",
+            Box::new(
+                WihcBank::<T, Heap>::new(&plants, &limits, SolveMode::Exact).map_err(bank_error)?,
+            ),
+        ),
+        (
+            "wihc-delayed",
+            Box::new(WihcBank::<T, Heap>::new(&plants, &limits, unchecked).map_err(bank_error)?),
+        ),
+        (
+            "wihc-guarded",
+            Box::new(WihcBank::<T, Heap>::new(&plants, &limits, guarded).map_err(bank_error)?),
+        ),
+        (
+            "dihc",
+            Box::new(
+                DihcBank::<T, Heap>::new(&inverses, &[(T::zero(), T::one())], &limits)
+                    .map_err(bank_error)?,
+            ),
+        ),
+    ];
+    for (what, mut b) in banks {
+        let (median, min) = time(ticks * channels, repeats, || {
+            b.reset();
+            b.process(black_box(&desired), &mut control)
+                .expect("a whole number of ticks");
+        });
+        figures.push(Figure {
+            what,
+            channels,
+            operators: OPERATORS,
+            precision,
+            ticks,
+            median_ns_per_channel_step: median,
+            min_ns_per_channel_step: min,
+        });
+    }
+    Ok(())
+}
+
+/// Runs `hystcomp bench --channels ...`: every bank kind for every channel count, f64 and f32.
+pub fn run(
+    channels: &[usize],
+    samples: usize,
+    repeats: usize,
+    ctx: Context,
+) -> Result<(), CliError> {
+    for &c in channels {
+        crate::bounds::count(
+            "--channels",
+            c,
+            1..=MAX_BENCH_CHANNELS,
+            "channels per bank (e.g. --channels 1,8,64,1024,4096)",
+        )?;
+    }
+    let mut figures = Vec::new();
+    for &c in channels {
+        bank::<f64>(&mut figures, c, samples, repeats, "f64")?;
+        bank::<f32>(&mut figures, c, samples, repeats, "f32")?;
+    }
+    let report = Report { repeats, figures };
+    if ctx.json {
+        crate::print_json(&report)?;
+        return Ok(());
+    }
+    outln!(
+        "bank cost per channel-step, ns ({OPERATORS} operators, each channel its own model; \
+         median of {repeats} runs, fastest in brackets)"
+    )?;
+    outln!("{:<14} {:>9} {:>22} {:>22}", "", "channels", "f64", "f32")?;
+    let mut rows: Vec<(&str, usize)> = Vec::new();
+    for f in &report.figures {
+        if !rows.contains(&(f.what, f.channels)) {
+            rows.push((f.what, f.channels));
+        }
+    }
+    for (what, c) in rows {
+        let cell = |precision: &str| {
+            report
+                .figures
+                .iter()
+                .find(|f| f.what == what && f.channels == c && f.precision == precision)
+                .map(|f| {
+                    format!(
+                        "{:.2} ({:.2})",
+                        f.median_ns_per_channel_step, f.min_ns_per_channel_step
+                    )
+                })
+                .unwrap_or_else(|| "-".into())
+        };
+        outln!(
+            "{:<14} {:>9} {:>22} {:>22}",
+            what,
+            c,
+            cell("f64"),
+            cell("f32")
+        )?;
+    }
+    Ok(())
+}

@@ -1,0 +1,263 @@
+//! `hystcomp compensate` with a model set (many channels, one column each) and `hystcomp bench
+//! --channels`, through the built binary: each channel's drive is what `compensate` writes for
+//! its own model alone, columns are found by channel name or position, bad input names the
+//! channel and row, saturation of any channel gives exit status 4.
+
+mod common;
+
+use common::*;
+
+use std::path::{Path, PathBuf};
+
+use hystcomp_io::bank::ModelSet;
+use hystcomp_io::data::{Column, ReadOptions, read_columns, write_csv};
+
+/// A three-column trajectory (time, then one column per axis of the xyz set, named `names`),
+/// each column its model driven by a voltage sweep (reachable).
+fn trajectory(dir: &Path, names: [&str; 3]) -> PathBuf {
+    let set = ModelSet::load(&models().join("table1-xyz-set.json")).unwrap();
+    let n = 1500;
+    let time: Vec<f64> = (0..n).map(|k| k as f64 * 1e-3).collect();
+    let columns: Vec<Vec<f64>> = set
+        .channels
+        .iter()
+        .enumerate()
+        .map(|(c, ch)| {
+            let mut plant = ch.model.model().unwrap();
+            time.iter()
+                .map(|t| {
+                    let v = 5.0 - 4.0 * (2.0 * std::f64::consts::PI * t + c as f64).cos();
+                    ch.model
+                        .output_to_physical(plant.step(ch.model.normalise_input(v)))
+                })
+                .collect()
+        })
+        .collect();
+    let path = dir.join("xyz.csv");
+    write_csv(
+        &path,
+        &["time_s", names[0], names[1], names[2]],
+        &[&time, &columns[0], &columns[1], &columns[2]],
+    )
+    .unwrap();
+    path
+}
+
+fn columns(path: &Path, count: usize) -> Vec<Vec<f64>> {
+    let wanted: Vec<Column> = (1..=count).map(Column::Index).collect();
+    read_columns(path, &wanted, &ReadOptions::default())
+        .unwrap()
+        .values
+}
+
+#[test]
+fn each_channel_is_its_own_model_compensated_alone() {
+    let dir = tempfile::tempdir().unwrap();
+    let desired = trajectory(dir.path(), ["x", "y", "z"]);
+    let set_file = models().join("table1-xyz-set.json");
+    let out = dir.path().join("drive.csv");
+    let output = hystcomp(&[
+        "compensate",
+        "--model",
+        s(&set_file),
+        "--method",
+        "ihc",
+        "--desired",
+        s(&desired),
+        "-o",
+        s(&out),
+    ]);
+    assert!(output.status.success(), "{}", stderr(&output));
+    assert!(
+        stdout(&output).contains("3 channels"),
+        "{}",
+        stdout(&output)
+    );
+    let header = std::fs::read_to_string(&out).unwrap();
+    assert!(
+        header.starts_with(
+            "time_s,drive_x_v,drive_y_v,drive_z_v,desired_x_um,desired_y_um,desired_z_um"
+        ),
+        "{}",
+        header.lines().next().unwrap()
+    );
+    let bank = columns(&out, 7);
+    // Each channel alone: its model in a file of its own, its column through `compensate`.
+    let set = ModelSet::load(&set_file).unwrap();
+    for (c, channel) in set.channels.iter().enumerate() {
+        let model = dir.path().join(format!("{}.json", channel.name));
+        channel.model.save(&model).unwrap();
+        let single = dir.path().join(format!("single_{}.csv", channel.name));
+        let output = hystcomp(&[
+            "compensate",
+            "--model",
+            s(&model),
+            "--method",
+            "ihc",
+            "--desired",
+            s(&desired),
+            "--desired-column",
+            &(c + 2).to_string(),
+            "-o",
+            s(&single),
+        ]);
+        assert!(output.status.success(), "{}", stderr(&output));
+        let alone = columns(&single, 2);
+        assert_eq!(bank[c + 1], alone[1], "channel {c}");
+    }
+    // Columns by position when the names differ; --json reports every channel.
+    let other = trajectory(dir.path(), ["a", "b", "c"]);
+    let out2 = dir.path().join("drive2.csv");
+    let output = hystcomp(&[
+        "--json",
+        "compensate",
+        "--model",
+        s(&set_file),
+        "--method",
+        "ihc",
+        "--desired",
+        s(&other),
+        "-o",
+        s(&out2),
+    ]);
+    assert!(output.status.success(), "{}", stderr(&output));
+    let report: serde_json::Value = serde_json::from_str(&stdout(&output)).unwrap();
+    assert_eq!(report["channels"].as_array().unwrap().len(), 3);
+    assert_eq!(report["channels"][2]["name"], "z");
+    assert_eq!(report["channels"][2]["desired_column"], "c");
+    assert_eq!(columns(&out2, 4)[1..], bank[1..4]);
+    // --desired-columns in another order: channel x reads column c (z's trajectory).
+    let out3 = dir.path().join("drive3.csv");
+    let output = hystcomp(&[
+        "compensate",
+        "--model",
+        s(&set_file),
+        "--method",
+        "ihc",
+        "--desired",
+        s(&other),
+        "--desired-columns",
+        "a,b,c",
+        "-o",
+        s(&out3),
+    ]);
+    assert!(output.status.success(), "{}", stderr(&output));
+}
+
+#[test]
+fn bad_input_names_the_channel() {
+    let dir = tempfile::tempdir().unwrap();
+    let desired = trajectory(dir.path(), ["x", "y", "z"]);
+    let set_file = models().join("table1-xyz-set.json");
+    let out = dir.path().join("drive.csv");
+    // Two columns named for three channels.
+    assert_fails(
+        &[
+            "compensate",
+            "--model",
+            s(&set_file),
+            "--method",
+            "ihc",
+            "--desired",
+            s(&desired),
+            "--desired-columns",
+            "x,y",
+            "-o",
+            s(&out),
+        ],
+        &["--desired-columns", "3 channels"],
+    );
+    // A plant set for DIHC: channel 0 named.
+    assert_fails(
+        &[
+            "compensate",
+            "--model",
+            s(&set_file),
+            "--method",
+            "dihc",
+            "--desired",
+            s(&desired),
+            "-o",
+            s(&out),
+        ],
+        &["channel 0 (x)"],
+    );
+    assert!(!out.exists());
+    // Positions beyond reach on one channel: exit status 4, the channel named, the file written.
+    let far = dir.path().join("far.csv");
+    let time: Vec<f64> = (0..100).map(|k| k as f64 * 1e-3).collect();
+    let ok: Vec<f64> = vec![30.0; 100];
+    let beyond: Vec<f64> = vec![500.0; 100];
+    write_csv(
+        &far,
+        &["time_s", "x", "y", "z"],
+        &[&time, &ok, &beyond, &ok],
+    )
+    .unwrap();
+    let output = hystcomp(&[
+        "compensate",
+        "--model",
+        s(&set_file),
+        "--method",
+        "ihc",
+        "--desired",
+        s(&far),
+        "-o",
+        s(&out),
+    ]);
+    assert_eq!(output.status.code(), Some(4), "{}", stderr(&output));
+    assert!(stderr(&output).contains("channel y"), "{}", stderr(&output));
+    assert!(
+        !stderr(&output).contains("channel x"),
+        "{}",
+        stderr(&output)
+    );
+    assert!(out.exists());
+    // --desired-columns without a set.
+    assert_fails(
+        &[
+            "compensate",
+            "--model",
+            s(&models().join("table1-plant.json")),
+            "--method",
+            "ihc",
+            "--desired",
+            s(&far),
+            "--desired-columns",
+            "x,y",
+            "-o",
+            s(&dir.path().join("other.csv")),
+        ],
+        &["--desired-columns", "model set"],
+    );
+}
+
+#[test]
+fn bench_times_the_banks() {
+    let output = hystcomp(&[
+        "--json",
+        "bench",
+        "--channels",
+        "1,8",
+        "--samples",
+        "400",
+        "--repeats",
+        "1",
+    ]);
+    assert!(output.status.success(), "{}", stderr(&output));
+    let report: serde_json::Value = serde_json::from_str(&stdout(&output)).unwrap();
+    let figures = report["figures"].as_array().unwrap();
+    // Seven methods, two channel counts, two precisions.
+    assert_eq!(figures.len(), 28);
+    for f in figures {
+        let ns = f["median_ns_per_channel_step"].as_f64().unwrap();
+        assert!(ns.is_finite() && ns > 0.0, "{f}");
+    }
+    assert!(
+        figures
+            .iter()
+            .any(|f| f["what"] == "dihc" && f["channels"] == 8)
+    );
+    assert_fails(&["bench", "--channels", "0"], &["--channels 0"]);
+    assert_fails(&["bench", "--channels", "70000"], &["--channels 70000"]);
+}
