@@ -57,6 +57,13 @@
 #define HYSTCOMP_DEFAULT_MHE_BINS 100
 
 /**
+ * The most samples one trial may have (5 000 000: 500 s at 10 kHz), checked before anything
+ * is read or allocated. A learner holds about ten copies of a trial (records, reference,
+ * drives, the filter's spectra): about 600 MB at the bound.
+ */
+#define HYSTCOMP_MAX_TRIAL_SAMPLES MAX_TRIAL_SAMPLES
+
+/**
  * The status every fallible function returns (as an `int`). `HYSTCOMP_STATUS_OK` is 0; every
  * other value comes with a message from `hystcomp_last_error_message()`.
  */
@@ -121,6 +128,12 @@ typedef enum HystcompStatus {
      * `hystcomp_compensator_from_model_file_with`.
      */
     HYSTCOMP_STATUS_UNSTABLE_DELAY = 10,
+    /**
+     * The divergence guard stopped the learning (`hystcomp_learner_update`): on the trial that
+     * tripped it the call wrote the last good drive; every later update is refused, the
+     * learner unchanged. Start a new learner with a lower gain or bandwidth.
+     */
+    HYSTCOMP_STATUS_LEARNING_STOPPED = 11,
 } HystcompStatus;
 
 /**
@@ -225,6 +238,12 @@ typedef struct HystcompBank HystcompBank;
  * released by `hystcomp_compensator_free`.
  */
 typedef struct HystcompCompensator HystcompCompensator;
+
+/**
+ * A learner of a repeated motion (opaque): the drive of the next trial from the measured
+ * response of the last (see `hystcomp_learner_new`). Released by `hystcomp_learner_free`.
+ */
+typedef struct HystcompLearner HystcompLearner;
 
 /**
  * A model file in memory (opaque): the MPIM's normalised parameters, the physical scales, the
@@ -480,6 +499,163 @@ typedef struct HystcompFitReport {
      */
     double elapsed_s;
 } HystcompFitReport;
+
+/**
+ * The learning law's options (`hystcomp_learn::LearningOptions`). Fill it with
+ * `hystcomp_learning_options_default`, then change what you need. Zero in `gain`,
+ * `bandwidth_hz`, `filter_order`, `divergence_factor` or `mhe_bins` means the default.
+ */
+typedef struct HystcompLearningOptions {
+    /**
+     * The records' sample rate, Hz (above 0, at most 1e7).
+     */
+    double sample_rate_hz;
+    /**
+     * Nonzero: each trial is one whole period of a periodic motion (filters wrap around);
+     * 0: a finite motion repeated from rest.
+     */
+    int periodic;
+    /**
+     * The learning gain `gamma` (0 < gain <= 10; default 0.8; above 2 diverges even on a
+     * perfect model, and the divergence guard stops it).
+     */
+    double gain;
+    /**
+     * The cut-off of the zero-phase filter `Q`, Hz (at most half the sample rate); 0: a
+     * hundredth of the sample rate, a tenth for a model with a vibration link.
+     */
+    double bandwidth_hz;
+    /**
+     * The order of `Q` (1 to 8; 0: 4).
+     */
+    size_t filter_order;
+    /**
+     * The phase lead of the learning, samples (0 to 1000).
+     */
+    size_t lead_samples;
+    /**
+     * A trial whose e_rms exceeds this factor times the best trial's stops the learning (above
+     * 1, at most 100; 0: 1.5).
+     */
+    double divergence_factor;
+    /**
+     * The exact inverse the learned reference is fed to: 0 = IHC, 1 = WIHC.
+     */
+    int inverse;
+    /**
+     * Nonzero: the drive limits are `v_min`, `v_max` (the model's voltage unit); 0: the range
+     * the model was identified on.
+     */
+    int use_limits;
+    /**
+     * The lower drive limit (with `use_limits`).
+     */
+    double v_min;
+    /**
+     * The upper drive limit (with `use_limits`).
+     */
+    double v_max;
+    /**
+     * Bins of the desired range for e_mhe (at most a tenth of the trial's samples); 0: 100.
+     */
+    size_t mhe_bins;
+} HystcompLearningOptions;
+
+/**
+ * One trial's outcome, written by `hystcomp_learner_update`. Indices in % of the desired
+ * range.
+ */
+typedef struct HystcompLearningUpdate {
+    /**
+     * The trial just measured (0: the first drive).
+     */
+    size_t trial;
+    /**
+     * Its RMS tracking error, (D2), %.
+     */
+    double e_rms_percent;
+    /**
+     * Its largest tracking error, (D1), %.
+     */
+    double e_m_percent;
+    /**
+     * Its maximum hysteresis error, eq. (12), %.
+     */
+    double e_mhe_percent;
+    /**
+     * Nonzero when the next trial's indices are predicted (not after the guard tripped).
+     */
+    int has_prediction;
+    /**
+     * The next trial's RMS error predicted by the law's linear model, %.
+     */
+    double predicted_e_rms_percent;
+    /**
+     * The next trial's largest error predicted, %.
+     */
+    double predicted_e_m_percent;
+    /**
+     * The next trial's e_mhe predicted, %.
+     */
+    double predicted_e_mhe_percent;
+    /**
+     * Samples of the next reference clamped into the range the model reaches within the
+     * limits.
+     */
+    size_t clamped_samples;
+    /**
+     * Nonzero when the divergence guard stopped the learning on this trial.
+     */
+    int diverged;
+    /**
+     * The best trial so far, whose drive is kept when the guard trips.
+     */
+    size_t best_trial;
+} HystcompLearningUpdate;
+
+/**
+ * The learning law in force (`hystcomp_learner_law`).
+ */
+typedef struct HystcompLearningLaw {
+    /**
+     * `gamma`.
+     */
+    double gain;
+    /**
+     * `m`, samples.
+     */
+    size_t lead_samples;
+    /**
+     * `Q`'s cut-off, Hz.
+     */
+    double bandwidth_hz;
+    /**
+     * `Q`'s order.
+     */
+    size_t filter_order;
+    /**
+     * Nonzero for periodic trials.
+     */
+    int periodic;
+    /**
+     * The stationary variance of the learned reference's noise relative to the sensor's
+     * (bounded: noise is not amplified trial after trial); negative when the update does not
+     * contract somewhere (`gamma Q >= 2`).
+     */
+    double stationary_noise_ratio;
+    /**
+     * The divergence factor.
+     */
+    double divergence_factor;
+    /**
+     * The drive limits, the model's voltage unit.
+     */
+    double v_min;
+    /**
+     * The upper drive limit.
+     */
+    double v_max;
+} HystcompLearningLaw;
 
 /**
  * The physical meaning of a model's normalised input or output (eq. (11)):
@@ -1104,6 +1280,118 @@ const char *hystcomp_status_name(int status);
  * The library's version, e.g. `"0.1.0"`. Never NULL, static.
  */
 const char *hystcomp_version(void);
+
+/**
+ * Writes the defaults at `sample_rate_hz` to `*out` (periodic trials, gain 0.8, `Q` of order
+ * 4 at its default cut-off, no lead, divergence factor 1.5, IHC, the model's range, 100
+ * bins).
+ *
+ * Fails with `NULL_POINTER`.
+ *
+ * # Safety
+ * `out` must be valid for one write or NULL.
+ */
+int hystcomp_learning_options_default(double sample_rate_hz, struct HystcompLearningOptions *out);
+
+/**
+ * Creates a learner for one trial of `desired` (`n` samples, the model's displacement unit)
+ * with a **plant** model: trial 0 runs the exact inverse's own drive for it
+ * (`hystcomp_learner_drive`). Learning: after each trial, `hystcomp_learner_update` with the
+ * measured response gives the next drive, `r_k+1 = sat(r_k + Q[gamma z^m e_k])` on the
+ * reference the exact inverse follows (Leang & Devasia 2006, doi:10.1016/j.mechatronics.2005.11.006;
+ * the law is `hystcomp-learn`'s).
+ *
+ * Allocates (a learner holds about ten copies of a trial): build it, and update it, between
+ * cycles, not in the control interrupt. The model is copied; it may be freed afterwards.
+ *
+ * Fails with `NULL_POINTER`, `INVALID_ARGUMENT` (n outside 2 ..=
+ * `HYSTCOMP_MAX_TRIAL_SAMPLES`, an option, an inverse model), `NON_FINITE_INPUT` (a NaN
+ * desired sample), `WRONG_DIRECTION` or `NOT_INVERTIBLE`.
+ *
+ * # Safety
+ * `model` a live model handle or NULL; `desired` `n` readable doubles or NULL; `options`
+ * readable or NULL; `out` valid for one write or NULL.
+ */
+int hystcomp_learner_new(const struct HystcompModel *model,
+                         const double *desired,
+                         size_t n,
+                         const struct HystcompLearningOptions *options,
+                         struct HystcompLearner **out);
+
+/**
+ * As `hystcomp_learner_new`, resuming from `drive` (`n` samples within the limits): the drive
+ * of the trial about to be measured (any compensator's, or a learner's saved earlier). The
+ * reference it follows is recovered by running the model over it.
+ *
+ * # Safety
+ * As `hystcomp_learner_new`; `drive` `n` readable doubles or NULL.
+ */
+int hystcomp_learner_resume(const struct HystcompModel *model,
+                            const double *desired,
+                            const double *drive,
+                            size_t n,
+                            const struct HystcompLearningOptions *options,
+                            struct HystcompLearner **out);
+
+/**
+ * Copies the drive of the next trial (`n` samples, the model's voltage unit: within the
+ * limits, never NaN) into `drive_out`. Does not allocate.
+ *
+ * Fails with `NULL_POINTER` or `INVALID_ARGUMENT` (`n` is not the trial's length).
+ *
+ * # Safety
+ * `h` a live handle or NULL; `drive_out` valid for `n` writes or NULL.
+ */
+int hystcomp_learner_drive(const struct HystcompLearner *h, double *drive_out, size_t n);
+
+/**
+ * The trial's measured response (`n` samples, aligned with the desired trajectory and the
+ * drive that was sent) in; the next trial's drive out, into `drive_out` (`n` samples), and
+ * the trial's indices into `*update` (or NULL). Allocates: call it between cycles.
+ *
+ * When the divergence guard trips on this trial (its e_rms above the factor times the best
+ * trial's), `drive_out` receives the best trial's drive (the last good one), `update->diverged`
+ * is set and the call returns `HYSTCOMP_STATUS_LEARNING_STOPPED`; every later update is
+ * refused with the same status, the learner unchanged.
+ *
+ * Fails with `NULL_POINTER`, `INVALID_ARGUMENT` (`n` is not the trial's length),
+ * `NON_FINITE_INPUT` (a NaN measured sample: nothing changed) or `LEARNING_STOPPED`.
+ *
+ * # Safety
+ * `h` a live handle or NULL, not used elsewhere meanwhile; `measured` `n` readable doubles or
+ * NULL; `drive_out` valid for `n` writes or NULL (it may be the same array as `measured`);
+ * `update` valid for one write or NULL.
+ */
+int hystcomp_learner_update(struct HystcompLearner *h,
+                            const double *measured,
+                            size_t n,
+                            double *drive_out,
+                            struct HystcompLearningUpdate *update);
+
+/**
+ * The trial's length in samples, into `*n`.
+ *
+ * # Safety
+ * `h` a live handle or NULL; `n` valid for one write or NULL.
+ */
+int hystcomp_learner_samples(const struct HystcompLearner *h, size_t *n);
+
+/**
+ * The learning law in force, into `*out`.
+ *
+ * # Safety
+ * `h` a live handle or NULL; `out` valid for one write or NULL.
+ */
+int hystcomp_learner_law(const struct HystcompLearner *h, struct HystcompLearningLaw *out);
+
+/**
+ * Releases a learner. NULL is accepted (and ignored).
+ *
+ * # Safety
+ * `h` a handle from `hystcomp_learner_new` or `hystcomp_learner_resume`, not used afterwards,
+ * or NULL.
+ */
+void hystcomp_learner_free(struct HystcompLearner *h);
 
 /**
  * Reads a model file and validates it (see `crates/io/src/model_file.rs`).

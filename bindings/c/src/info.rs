@@ -29,6 +29,7 @@ pub extern "C" fn hystcomp_status_name(status: c_int) -> *const c_char {
         8 => c"internal error",
         9 => c"identification failed",
         10 => c"delayed loop can oscillate on this model",
+        11 => c"learning stopped by the divergence guard",
         _ => c"unknown status",
     };
     name.as_ptr()

@@ -12,7 +12,8 @@
 //!
 //! One module per job: `compensator` and `compensate` (compensators, from files, parameters or
 //! models, and the one-shot compensation), `bank` (many channels in one handle), `mpim`
-//! (forward models), `model` (models in memory: files, values), `identify`, `indices`, `info`
+//! (forward models), `model` (models in memory: files, values), `identify`, `indices`, `learn`
+//! (learning from repetition between trials), `info`
 //! (messages, version); `boundary` and `args` hold the checks every entry point shares.
 //!
 //! The header `include/hystcomp.h` is generated from these files by cbindgen
@@ -72,6 +73,7 @@ mod compensator;
 mod identify;
 mod indices;
 mod info;
+mod learn;
 mod model;
 mod mpim;
 
@@ -81,6 +83,7 @@ pub use compensator::*;
 pub use identify::*;
 pub use indices::*;
 pub use info::*;
+pub use learn::*;
 pub use model::*;
 pub use mpim::*;
 
@@ -127,6 +130,10 @@ pub enum HystcompStatus {
     /// `wihc-guarded`), or pass `HYSTCOMP_ALLOW_UNSTABLE_DELAY` to
     /// `hystcomp_compensator_from_model_file_with`.
     UnstableDelay = 10,
+    /// The divergence guard stopped the learning (`hystcomp_learner_update`): on the trial that
+    /// tripped it the call wrote the last good drive; every later update is refused, the
+    /// learner unchanged. Start a new learner with a lower gain or bandwidth.
+    LearningStopped = 11,
 }
 
 /// Flag of `hystcomp_compensator_from_model_file_with`: build a plain delayed method even when

@@ -129,6 +129,19 @@ fn c_program_identifies_saves_loads_compensates_and_scores() {
 }
 
 #[test]
+fn c_program_learns_between_trials_and_is_stopped_by_the_guard() {
+    let program = compile("bindings/c/tests/c/learner.c", "learner");
+    let output = run(
+        Command::new(program)
+            .current_dir(workspace_root())
+            .arg("models/table1-plant.json"),
+        "bindings/c/tests/c/learner.c must pass its own checks",
+    );
+    let stdout = String::from_utf8_lossy(&output.stdout);
+    assert!(stdout.starts_with("learner OK: e_rms "), "{stdout}");
+}
+
+#[test]
 fn c_example_refuses_an_inverse_model_with_the_reason() {
     let output = Command::new(round_trip_program())
         .current_dir(workspace_root())
@@ -306,6 +319,7 @@ fn c_programs_run_clean_under_valgrind() {
     }
     let dir = tempfile::tempdir().expect("a temporary directory");
     let models = compile("bindings/c/tests/c/models.c", "models");
+    let learner = compile("bindings/c/tests/c/learner.c", "learner");
     let runs: Vec<(&PathBuf, Vec<std::ffi::OsString>, i32)> = vec![
         (
             round_trip_program(),
@@ -319,6 +333,7 @@ fn c_programs_run_clean_under_valgrind() {
         ),
         (round_trip_program(), vec![], 2),
         (&models, vec![dir.path().into()], 0),
+        (&learner, vec!["models/table1-plant.json".into()], 0),
     ];
     for (program, args, code) in runs {
         let output = Command::new("valgrind")
