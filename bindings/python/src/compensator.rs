@@ -23,6 +23,7 @@ pub enum ModelArg<'py> {
 }
 
 impl ModelArg<'_> {
+    /// The model file: the one given, or read from the path.
     pub(crate) fn load(self) -> PyResult<IoModelFile> {
         match self {
             ModelArg::File(f) => Ok(f.inner.clone()),
@@ -31,7 +32,7 @@ impl ModelArg<'_> {
     }
 }
 
-fn parse_method(method: &str) -> PyResult<Method> {
+pub(crate) fn parse_method(method: &str) -> PyResult<Method> {
     method.parse().map_err(errors::compensator)
 }
 
@@ -254,7 +255,7 @@ impl Compensator {
 }
 
 /// The override `allow_unstable_delay` asks for.
-fn unstable_delay(allow: bool) -> UnstableDelay {
+pub(crate) fn unstable_delay(allow: bool) -> UnstableDelay {
     if allow {
         UnstableDelay::Allow
     } else {

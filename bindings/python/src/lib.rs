@@ -7,6 +7,7 @@
 //! - `model`: `Mpim` (the core's model, normalised), `Scale`, `ModelFile` (hystcomp-io);
 //! - `compensator`: `Compensator` (hystcomp-io's `ScaledCompensator`: IHC, WIHC, DIHC in
 //!   physical units);
+//! - `bank`: `CompensatorBank` (hystcomp-io's `ScaledBank`: many channels stepped together);
 //! - `identify`: `identify(...)` (hystcomp-identify);
 //! - `stage`: `Stage`, `StageResponse` (hystcomp-stage);
 //! - `indices`: `e_m`, `e_rms`, `e_mhe`, `tracking_indices` (hystcomp-experiments);
@@ -17,6 +18,7 @@
 //! a Python exception with the library's message (module `errors`); no panic is relied upon.
 
 mod arrays;
+mod bank;
 mod compensator;
 mod errors;
 mod identify;
@@ -40,6 +42,7 @@ fn _hystcomp(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<model::Scale>()?;
     m.add_class::<model::ModelFile>()?;
     m.add_class::<compensator::Compensator>()?;
+    m.add_class::<bank::CompensatorBank>()?;
     m.add_class::<identify::Identification>()?;
     m.add_class::<stage::Stage>()?;
     m.add_class::<stage::StageResponse>()?;

@@ -11,6 +11,8 @@ and out):
 - ``ModelFile``: an identified model with its physical scales (JSON), ``Scale``;
 - ``Compensator`` and its shorthands ``Ihc``, ``Wihc``, ``Dihc``: desired position in, drive
   voltage out, never outside the limits;
+- ``CompensatorBank``: many channels (a multi-axis stage, a deformable mirror) stepped
+  together, ``step`` over shape ``(channels,)``, ``process`` over ``(samples, channels)``;
 - ``identify(voltage, displacement, ...)``: a model from measured data (least squares or
   particle swarm);
 - ``Stage``: a simulated piezo stage, ``stage.run(volts)`` returning a ``StageResponse``
@@ -63,6 +65,7 @@ from ._reports import (
 from ._hystcomp import (
     DEFAULT_MHE_BINS,
     Compensator,
+    CompensatorBank,
     Identification,
     Learner,
     ModelFile,
@@ -100,6 +103,7 @@ __all__ = [
     "plot_response",
     "DEFAULT_MHE_BINS",
     "Compensator",
+    "CompensatorBank",
     "Dihc",
     "HystcompError",
     "Identification",

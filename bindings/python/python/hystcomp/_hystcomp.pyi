@@ -275,6 +275,67 @@ class Compensator:
         """For the IHC and WIHC methods: the under-relaxation of the family's guarded delayed
         loop, in ``(0, 1]`` (1: the guarded loop is the plain one). ``None`` for DIHC."""
 
+class CompensatorBank:
+    """Many feedforward hysteresis compensators of one method, one channel per model, stepped
+    together (the axes of a stage, the actuators of a deformable mirror): desired positions in,
+    drive voltages out, each in its own model's physical units. Channel ``c`` gives what a
+    ``Compensator`` built from its own model gives, bit for bit.
+
+    - ``models``: the path of a model-set file (``{"format": "hystcomp-model-set", ...}``), of
+      a directory of model files (one channel per ``*.json``, in the order of their names) or of
+      one model file; or a list of models (each a ``ModelFile`` or the path of one);
+    - ``method``: as ``Compensator``, the same for every channel;
+    - ``limits``: ``(min, max)`` for every channel, or one pair per channel; by default each
+      channel's identified range;
+    - ``allow_unstable_delay``: as ``Compensator``.
+
+    ``step(y_d)`` takes an array of shape ``(channels,)``, ``process(y_d)`` one of shape
+    ``(samples, channels)``; both return arrays of the same shape, every drive within its
+    channel's limits. NaN or infinite desired positions are refused with ``InvalidValueError``
+    naming the sample and channel (state unchanged). A channel that cannot be built raises the
+    error ``Compensator`` would, its message beginning ``channel K (NAME): ``."""
+
+    def __init__(
+        self,
+        models: Union[PathLike, Sequence[Union[ModelFile, PathLike]]],
+        method: str = "ihc",
+        limits: Optional[Union[Sequence[float], Sequence[Sequence[float]]]] = None,
+        *,
+        allow_unstable_delay: bool = False,
+    ) -> None: ...
+    def step(self, y_d: ArrayLike) -> FloatArray:
+        """One control tick: the drives (shape ``(channels,)``) for the desired positions
+        ``y_d`` (shape ``(channels,)``)."""
+    def process(self, y_d: npt.ArrayLike) -> FloatArray:
+        """A whole desired trajectory of shape ``(samples, channels)`` from the current state:
+        the drives, same shape. Releases the GIL while it runs."""
+    def reset(self) -> None:
+        """Every channel back to its initial state: operators' memory zero (eq. (1)), diagnostics
+        cleared."""
+    @property
+    def channels(self) -> int:
+        """The number of channels."""
+    def __len__(self) -> int: ...
+    @property
+    def names(self) -> List[str]:
+        """The channels' names (a model set's names, file stems, or ``channel_K``)."""
+    @property
+    def method(self) -> str:
+        """The method of every channel."""
+    @property
+    def limits(self) -> List[Tuple[float, float]]:
+        """``(min, max)`` drive limits of every channel, each in its ``control_units``."""
+    @property
+    def desired_units(self) -> List[str]:
+        """Every channel's unit of the desired position, e.g. ``"um"``."""
+    @property
+    def control_units(self) -> List[str]:
+        """Every channel's unit of the drive, e.g. ``"V"``."""
+    @property
+    def diagnostics(self) -> List[Diagnostics]:
+        """Every channel's counters since the last reset, a list of ``Diagnostics`` (as
+        ``Compensator.diagnostics``)."""
+
 class Identification:
     """An identified model: ``.model`` (a ``ModelFile``, physical scales and normalised
     parameters), ``.report`` (a ``FitReport`` dataclass: fit errors in physical units and % of the output range,
