@@ -163,8 +163,10 @@ pub struct FitArgs {
         value_name = "C"
     )]
     pub offset_bound: f64,
-    /// Write the model even when its RMS fit error exceeds 10 % of the output range (such a
-    /// fit is refused by default: the columns, factors or offset are probably wrong).
+    /// Write the model even when its RMS fit error exceeds 10 % of the output range, or the
+    /// displacement does not rise with the voltage (correlation below 0.5): both are refused
+    /// by default, since the columns, factors or offset are probably wrong. The same column
+    /// given twice stays refused.
     #[arg(long)]
     pub accept_poor_fit: bool,
     /// Fit a plant model meant for one-sample-delayed compensation (ihc-delayed,
