@@ -66,6 +66,17 @@ pub enum IdentifyError {
         /// The limit.
         limit: f64,
     },
+    /// The particle swarm ended far from the optimum: its model's RMS error exceeds the
+    /// limit while the least-squares optimum of the same problem is within it, so the data
+    /// are fine and the swarm did not converge.
+    SwarmNotConverged {
+        /// The swarm's RMS error, % of the fitted output range.
+        rms_percent: f64,
+        /// The least-squares optimum's, on the same problem.
+        least_squares_rms_percent: f64,
+        /// The limit.
+        limit: f64,
+    },
     /// The identified parameters were refused by the core (should not happen: every
     /// constraint the core checks is part of the fitting problem).
     Core(CoreError),
@@ -134,6 +145,19 @@ impl fmt::Display for IdentifyError {
                  record to about 1 %). Check the columns, the factors and the output offset \
                  (--offset fit is right for a sensor with an arbitrary zero); pass \
                  --accept-poor-fit to write the model anyway"
+            ),
+            IdentifyError::SwarmNotConverged {
+                rms_percent,
+                least_squares_rms_percent,
+                limit,
+            } => write!(
+                f,
+                "the particle swarm did not converge: its best model leaves an RMS error of \
+                 {rms_percent:.3} % of the output range, more than {limit} %, where least \
+                 squares reaches {least_squares_rms_percent:.3} % on the same data and \
+                 thresholds; give the swarm more iterations or particles (--pso-iterations, \
+                 --pso-particles), --polish, or use --method ls (pass --accept-poor-fit to \
+                 write the swarm's model anyway)"
             ),
             IdentifyError::Core(e) => write!(f, "the identified model is refused: {e}"),
             IdentifyError::ModelFile(e) => e.fmt(f),

@@ -193,3 +193,64 @@ fn accept_poor_fit_overrides_the_correlation_refusal() {
         IdentifyError::SameSignal
     ));
 }
+
+/// A swarm cut short far from the optimum is said to have not converged, with the
+/// least-squares figure beside it, instead of blaming the columns or the offset.
+#[test]
+fn a_swarm_far_from_the_optimum_says_it_did_not_converge() {
+    let (voltage, displacement) = record(9, 10, 0.1);
+    let ls = identify(
+        &voltage,
+        &displacement,
+        &IdentifyOptions {
+            thresholds: Thresholds::Uniform(10),
+            ..IdentifyOptions::default()
+        },
+    )
+    .unwrap();
+    let mut said = 0;
+    for seed in 0..12 {
+        let options = IdentifyOptions {
+            thresholds: Thresholds::Uniform(10),
+            method: Method::ParticleSwarm(
+                PsoOptions::default()
+                    .with_seed(seed)
+                    .with_iterations(3)
+                    .unwrap()
+                    .with_particles(4)
+                    .unwrap(),
+            ),
+            ..IdentifyOptions::default()
+        };
+        match identify(&voltage, &displacement, &options) {
+            Err(e @ IdentifyError::SwarmNotConverged { .. }) => {
+                let IdentifyError::SwarmNotConverged {
+                    rms_percent,
+                    least_squares_rms_percent,
+                    limit,
+                } = e
+                else {
+                    unreachable!()
+                };
+                assert!(rms_percent > limit);
+                assert!(
+                    (least_squares_rms_percent - ls.report.fit.rms_percent).abs()
+                        < 1e-6 * (1.0 + ls.report.fit.rms_percent)
+                );
+                let message = e.to_string();
+                assert!(message.contains("did not converge"), "{message}");
+                assert!(!message.contains("columns"), "{message}");
+                said += 1;
+            }
+            // A swarm this short may also end infeasible (said as such) or, by chance, within
+            // the limit (a usable model).
+            Err(IdentifyError::SwarmInfeasible { .. }) => {}
+            Ok(fit) => assert!(fit.report.fit.rms_percent <= 10.0),
+            Err(e) => panic!("seed {seed}: {e}"),
+        }
+    }
+    assert!(
+        said >= 1,
+        "no short swarm ended feasible but far from the optimum"
+    );
+}
