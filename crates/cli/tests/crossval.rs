@@ -441,3 +441,53 @@ fn dbo_records_cross_validate_within_sane_bounds() {
         assert!(rms < 1.5 * m_rms && max < 1.5 * m_max, "{r}");
     }
 }
+
+/// Issue 10's acceptance on the shared DBO record: with `-n auto` the best compensator's
+/// offline inverse replay is within 1.2 % of the test voltage range; the choice is said on
+/// stderr and is one of the candidates.
+#[test]
+fn dbo_crossval_with_n_auto_replays_the_best_compensator_within_1_2_percent() {
+    let (Some(train), Some(test)) = (
+        hystcomp_testkit::dbo_record("Model_Vi_Do.dat"),
+        hystcomp_testkit::dbo_record("Test_Vi_Do_Di.dat"),
+    ) else {
+        return;
+    };
+    let out = hystcomp(&[
+        "--json",
+        "crossval",
+        "--train",
+        s(&train),
+        "--test",
+        s(&test),
+        "--voltage-column",
+        "1",
+        "--displacement-column",
+        "5",
+        "-n",
+        "auto",
+    ]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let said = stderr(&out);
+    assert!(
+        said.contains("-n auto") && said.contains("chose n = "),
+        "{said}"
+    );
+    let doc: Value = serde_json::from_slice(&out.stdout).unwrap();
+    let n = doc["report"]["plant"]["thresholds"]
+        .as_array()
+        .unwrap()
+        .len();
+    assert!(
+        hystcomp_identify::AUTO_OPERATOR_CANDIDATES.contains(&n),
+        "{n}"
+    );
+    let best = doc["report"]["test"]["replay"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .filter_map(|r| r["error"]["rms_percent"].as_f64())
+        .fold(f64::INFINITY, f64::min);
+    eprintln!("DBO crossval -n auto: n = {n}, best replay RMS {best:.3} %");
+    assert!(best <= 1.2, "best replay {best} % with n = {n}");
+}

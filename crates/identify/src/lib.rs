@@ -74,6 +74,7 @@ mod error;
 mod identification;
 pub mod ls;
 mod options;
+pub mod order;
 pub mod problem;
 pub mod pso;
 mod report;
@@ -97,6 +98,9 @@ pub use options::{
     DEFAULT_MAX_FIT_RMS_PERCENT, DEFAULT_OPERATORS, IdentifyOptions, MAX_OPERATORS,
     MAX_REGRESSOR_VALUES, MIN_CORRELATION, Method, OutputOffset, SAMPLES_PER_PARAMETER, Thresholds,
     Warmup,
+};
+pub use order::{
+    AUTO_HOLDOUT, AUTO_OPERATOR_CANDIDATES, OrderCandidate, OrderSelection, select_operators,
 };
 pub use problem::{
     Constraint, ConstraintKind, DelayedCompensator, FitProblem, Parameters, ProblemData,

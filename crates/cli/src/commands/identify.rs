@@ -77,14 +77,16 @@ pub struct FitArgs {
     #[arg(long, default_value = "ls", value_parser = ["ls", "pso"])]
     pub method: String,
     /// Number of play operators n (1 to 1000); thresholds (i - 1)/n of the input range
-    /// (eq. (11)).
+    /// (eq. (11)). `auto` chooses among 5, 10, 15, 20, 30, 40 and 50 the one whose model
+    /// predicts the last 25 % of the record (or --holdout) best, and says which and why.
     #[arg(
         short = 'n',
         long = "operators",
-        default_value_t = 10,
-        value_name = "N"
+        default_value = "10",
+        value_name = "N|auto",
+        value_parser = parse_operators
     )]
-    pub operators: usize,
+    pub operators: Operators,
     /// Thresholds given explicitly, comma-separated fractions of the input range in [0, 1),
     /// strictly increasing (instead of -n), e.g. 0,0.1,0.25,0.5.
     #[arg(
@@ -185,6 +187,25 @@ pub struct FitArgs {
     /// pso: polish the best particle by least squares on the constraints it leaves active.
     #[arg(long)]
     pub polish: bool,
+}
+
+/// `-n`: a number of play operators, or `auto` (chosen by held-out error).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Operators {
+    /// This many.
+    Count(usize),
+    /// Chosen by [`hystcomp_identify::select_operators`].
+    Auto,
+}
+
+fn parse_operators(text: &str) -> Result<Operators, String> {
+    let text = text.trim();
+    if text.eq_ignore_ascii_case("auto") {
+        return Ok(Operators::Auto);
+    }
+    text.parse()
+        .map(Operators::Count)
+        .map_err(|_| format!("expected a number of play operators or auto, got {text:?}"))
 }
 
 /// The constraints of the fit, for `--help` of `identify` and `crossval`.
@@ -395,12 +416,14 @@ impl FitArgs {
     /// option, before any record is read.
     pub fn check_sizes(&self) -> Result<(), CliError> {
         use hystcomp_identify::{MAX_ITERATIONS, MAX_OPERATORS, MAX_PARTICLES};
-        bounds::count(
-            "-n/--operators",
-            self.operators,
-            1..=MAX_OPERATORS,
-            "play operators (the paper uses 10; the fit's cost grows with their square)",
-        )?;
+        if let Operators::Count(n) = self.operators {
+            bounds::count(
+                "-n/--operators",
+                n,
+                1..=MAX_OPERATORS,
+                "play operators (the paper uses 10; the fit's cost grows with their square)",
+            )?;
+        }
         if let Some(thresholds) = &self.thresholds {
             bounds::count(
                 "--thresholds",
@@ -476,7 +499,11 @@ impl FitArgs {
         };
         let thresholds = match &self.thresholds {
             Some(values) => Thresholds::Given(values.clone()),
-            None => Thresholds::Uniform(self.operators),
+            None => match self.operators {
+                Operators::Count(n) => Thresholds::Uniform(n),
+                // Chosen below, once the other options are known.
+                Operators::Auto => Thresholds::Uniform(hystcomp_identify::DEFAULT_OPERATORS),
+            },
         };
         let warmup = match self.warmup_seconds {
             Some(seconds) => Warmup::Samples(warmup_samples(seconds, columns, loaded)?),
@@ -501,6 +528,36 @@ impl FitArgs {
             displacement_unit: columns.displacement_unit.clone(),
         };
         options.validate()?;
+        if self.operators == Operators::Auto && self.thresholds.is_none() {
+            let selection = hystcomp_identify::select_operators(
+                &loaded.voltage,
+                &loaded.displacement,
+                &options,
+                &hystcomp_identify::AUTO_OPERATOR_CANDIDATES,
+            )?;
+            let tried: Vec<String> = selection
+                .candidates
+                .iter()
+                .map(|c| {
+                    format!(
+                        "{} -> {} %",
+                        c.operators,
+                        crate::number(c.holdout_rms_percent)
+                    )
+                })
+                .collect();
+            errln!(
+                "hystcomp: -n auto: held-out RMS error (last {} % of the record, fitted on the \
+                 rest) for n = {}; chose n = {}",
+                crate::number(100.0 * selection.holdout),
+                tried.join(", "),
+                selection.operators
+            );
+            return Ok(IdentifyOptions {
+                thresholds: Thresholds::Uniform(selection.operators),
+                ..options
+            });
+        }
         Ok(options)
     }
 
