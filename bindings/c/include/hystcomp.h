@@ -950,6 +950,23 @@ int hystcomp_compensator_from_model(const struct HystcompModel *m,
                                     struct HystcompCompensator **out);
 
 /**
+ * As `hystcomp_compensator_from_model`, with `flags`: 0, or `HYSTCOMP_ALLOW_UNSTABLE_DELAY`
+ * to build a plain delayed method (`ihc-delayed`, `wihc-delayed`) even when its loop gain
+ * over the limits is 1 or more (as `hystcomp_compensator_from_model_file_with`). Other flag
+ * bits are refused with `INVALID_ARGUMENT`.
+ *
+ * # Safety
+ * As `hystcomp_compensator_from_model`.
+ */
+int hystcomp_compensator_from_model_with(const struct HystcompModel *m,
+                                         const char *method,
+                                         double v_min,
+                                         double v_max,
+                                         int use_limits,
+                                         int flags,
+                                         struct HystcompCompensator **out);
+
+/**
  * One-shot compensation: the drive `v[k]` for every desired position `y_d[k]` of a whole
  * known trajectory, from the initial state (zero operator memory, eq. (1)), as a compensator
  * made by `hystcomp_compensator_from_model` and run by `hystcomp_compensator_process` would

@@ -2,11 +2,12 @@
 
 use std::ffi::{c_char, c_int};
 
-use hystcomp_io::compensator::{Method, ScaledCompensator};
+use hystcomp_io::compensator::{Method, ScaledCompensator, UnstableDelay};
 
 use crate::HystcompCompensator;
 use crate::args::{check_array, clear_out, non_finite_failure, put_handle, str_arg, write_out};
 use crate::boundary::{Failure, boundary};
+use crate::compensator::unstable_delay;
 use crate::model::{HystcompModel, model_arg};
 
 /// What a compensator did to a signal (`hystcomp_compensate`), counted over the signal, and the
@@ -38,11 +39,17 @@ unsafe fn build(
     v_min: f64,
     v_max: f64,
     use_limits: c_int,
+    unstable: UnstableDelay,
 ) -> Result<ScaledCompensator, Failure> {
     // SAFETY: NUL-terminated or NULL (the caller's contract).
     let method: Method = unsafe { str_arg(method, "method") }?.parse()?;
     let limits = (use_limits != 0).then_some((v_min, v_max));
-    Ok(ScaledCompensator::new(&model.file, method, limits)?)
+    Ok(ScaledCompensator::with_unstable_delay(
+        &model.file,
+        method,
+        limits,
+        unstable,
+    )?)
 }
 
 /// Creates a compensator from a model in memory, in its physical units: desired position in,
@@ -72,7 +79,47 @@ pub unsafe extern "C" fn hystcomp_compensator_from_model(
         // SAFETY: a live handle or NULL (the caller's contract).
         let model = unsafe { model_arg(m) }?;
         // SAFETY: NUL-terminated or NULL (the caller's contract).
-        let inner = unsafe { build(model, method, v_min, v_max, use_limits) }?;
+        let inner = unsafe {
+            build(
+                model,
+                method,
+                v_min,
+                v_max,
+                use_limits,
+                UnstableDelay::Refuse,
+            )
+        }?;
+        // SAFETY: `out` was checked non-NULL by `clear_out` and is valid for a write.
+        unsafe { put_handle(out, HystcompCompensator { inner }) };
+        Ok(())
+    })
+}
+
+/// As `hystcomp_compensator_from_model`, with `flags`: 0, or `HYSTCOMP_ALLOW_UNSTABLE_DELAY`
+/// to build a plain delayed method (`ihc-delayed`, `wihc-delayed`) even when its loop gain
+/// over the limits is 1 or more (as `hystcomp_compensator_from_model_file_with`). Other flag
+/// bits are refused with `INVALID_ARGUMENT`.
+///
+/// # Safety
+/// As `hystcomp_compensator_from_model`.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn hystcomp_compensator_from_model_with(
+    m: *const HystcompModel,
+    method: *const c_char,
+    v_min: f64,
+    v_max: f64,
+    use_limits: c_int,
+    flags: c_int,
+    out: *mut *mut HystcompCompensator,
+) -> c_int {
+    boundary(|| {
+        // SAFETY: `out` is valid or NULL (the caller's contract).
+        unsafe { clear_out(out) }?;
+        let unstable = unstable_delay(flags)?;
+        // SAFETY: a live handle or NULL (the caller's contract).
+        let model = unsafe { model_arg(m) }?;
+        // SAFETY: NUL-terminated or NULL (the caller's contract).
+        let inner = unsafe { build(model, method, v_min, v_max, use_limits, unstable) }?;
         // SAFETY: `out` was checked non-NULL by `clear_out` and is valid for a write.
         unsafe { put_handle(out, HystcompCompensator { inner }) };
         Ok(())
@@ -136,7 +183,16 @@ pub unsafe extern "C" fn hystcomp_compensate(
         check_array(y_d, y_d_len, "y_d")?;
         check_array(v, v_len, "v")?;
         // SAFETY: NUL-terminated or NULL (the caller's contract).
-        let mut compensator = unsafe { build(model, method, v_min, v_max, use_limits) }?;
+        let mut compensator = unsafe {
+            build(
+                model,
+                method,
+                v_min,
+                v_max,
+                use_limits,
+                UnstableDelay::Refuse,
+            )
+        }?;
         // SAFETY: `y_d_len` readable doubles (the caller's contract), non-NULL and aligned
         // (checked); copied before `v` is written, so the two may be the same array.
         let desired = unsafe { std::slice::from_raw_parts(y_d, y_d_len) }.to_vec();

@@ -93,7 +93,7 @@ pub unsafe extern "C" fn hystcomp_compensator_from_model_file_with(
 }
 
 /// The override the flags ask for.
-fn unstable_delay(flags: c_int) -> Result<UnstableDelay, Failure> {
+pub(crate) fn unstable_delay(flags: c_int) -> Result<UnstableDelay, Failure> {
     match flags {
         0 => Ok(UnstableDelay::Refuse),
         HYSTCOMP_ALLOW_UNSTABLE_DELAY => Ok(UnstableDelay::Allow),

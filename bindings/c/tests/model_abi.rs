@@ -444,6 +444,45 @@ fn a_delayed_loop_that_can_ring_is_refused_from_memory_too() {
     };
     assert_eq!(status, HystcompStatus::UnstableDelay as c_int);
     assert!(out.is_null());
+    // The explicit override builds it; the drive still stays within the limits. Unknown
+    // flags are refused.
+    // SAFETY: a live handle, a valid string and out-pointer.
+    let status = unsafe {
+        hystcomp_compensator_from_model_with(
+            m,
+            c"wihc-delayed".as_ptr(),
+            0.0,
+            0.0,
+            0,
+            HYSTCOMP_ALLOW_UNSTABLE_DELAY,
+            &mut out,
+        )
+    };
+    assert_eq!(status, OK, "{}", last_error());
+    assert!(!out.is_null());
+    let mut v = vec![0.0; y_d.len()];
+    // SAFETY: a live handle and arrays of the stated length.
+    check(unsafe { hystcomp_compensator_process(out, y_d.as_ptr(), v.as_mut_ptr(), v.len()) })
+        .unwrap();
+    assert!(v.iter().all(|v| (0.0..=10.0).contains(v)), "{v:?}");
+    // SAFETY: a live handle, freed once.
+    unsafe { hystcomp_compensator_free(out) };
+    let mut refused = std::ptr::dangling_mut();
+    // SAFETY: a live handle, a valid string and out-pointer.
+    let status = unsafe {
+        hystcomp_compensator_from_model_with(
+            m,
+            c"wihc-delayed".as_ptr(),
+            0.0,
+            0.0,
+            0,
+            2,
+            &mut refused,
+        )
+    };
+    assert_eq!(status, HystcompStatus::InvalidArgument as c_int);
+    assert!(refused.is_null());
+    assert!(last_error().contains("flags"), "{}", last_error());
     free(m);
 }
 

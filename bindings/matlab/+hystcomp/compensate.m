@@ -3,8 +3,10 @@ function varargout = compensate(varargin)
 %   V = hystcomp.compensate(MODEL, METHOD, YD) returns the drive voltage V for the desired
 %   positions YD (a vector, the model's displacement unit), from the initial state (zero
 %   operator memory, eq. (1)), as hystcomp.Compensator(MODEL, METHOD).process(YD) would.
-%   METHOD: 'ihc' (eqs. (5)-(8)), 'ihc-delayed', 'wihc' (eq. (9)), 'wihc-delayed' (plant
-%   models) or 'dihc' (eq. (10), inverse models). MODEL is a model struct or a model file's name.
+%   METHOD: 'ihc' (eqs. (5)-(8)), 'ihc-delayed', 'wihc' (eq. (9)), 'wihc-delayed',
+%   'ihc-guarded', 'wihc-guarded' (plant models) or 'dihc' (eq. (10), inverse models). MODEL is
+%   a model struct or a model file's name. A plain delayed method whose loop can oscillate is
+%   refused (hystcomp:unstableDelay); hystcomp.Compensator takes the explicit override.
 %   V has the shape of YD, lies within the drive limits and is never NaN. For a model with a
 %   vibration link, V(k) is the drive for YD(k) (the inverse's preview removed).
 %
@@ -17,6 +19,7 @@ function varargout = compensate(varargin)
 %
 %   Errors: hystcomp:notInvertible (the model bends back within the limits),
 %   hystcomp:wrongDirection (IHC and WIHC need a plant model, DIHC an inverse one),
+%   hystcomp:unstableDelay (a plain delayed loop with loop gain >= 1),
 %   hystcomp:invalidArgument (unknown method, limits), and those of the arguments.
 %
 %   See also hystcomp.Compensator, hystcomp.predict.

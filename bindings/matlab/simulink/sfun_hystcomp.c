@@ -6,7 +6,9 @@
  * Parameters (S-function block, "S-function parameters" field):
  *   1  model file name   a JSON model file, e.g. 'plant.json' (from hystcomp.save_model or
  *                        `hystcomp identify`)
- *   2  method            'ihc', 'ihc-delayed', 'wihc', 'wihc-delayed' or 'dihc'
+ *   2  method            'ihc', 'ihc-delayed', 'wihc', 'wihc-delayed', 'ihc-guarded',
+ *                        'wihc-guarded' or 'dihc' (a plain delayed loop that can oscillate
+ *                        is refused: use the guarded one)
  *   3  drive limits      [v_min v_max] in the model's voltage unit, or [] for the range the
  *                        model was identified on
  *   4  sample time       in s (> 0), e.g. 1e-4 for a 10 kHz loop
@@ -56,7 +58,7 @@ static void mdlCheckParameters(SimStruct *S) {
     }
     if (!mxIsChar(ssGetSFcnParam(S, PARAM_METHOD))) {
         set_error(S, "parameter 2 must be the method (text): 'ihc', 'ihc-delayed', 'wihc', "
-                     "'wihc-delayed' or 'dihc'");
+                     "'wihc-delayed', 'ihc-guarded', 'wihc-guarded' or 'dihc'");
         return;
     }
     if (!mxIsDouble(limits) || mxIsComplex(limits) ||

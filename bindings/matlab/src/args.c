@@ -32,6 +32,8 @@ const char *status_id(int status) {
     case HYSTCOMP_STATUS_NON_FINITE_INPUT: return "hystcomp:nonFiniteInput";
     case HYSTCOMP_STATUS_INTERNAL: return "hystcomp:internal";
     case HYSTCOMP_STATUS_IDENTIFICATION_FAILED: return "hystcomp:identificationFailed";
+    case HYSTCOMP_STATUS_UNSTABLE_DELAY: return "hystcomp:unstableDelay";
+    case HYSTCOMP_STATUS_LEARNING_STOPPED: return "hystcomp:learningStopped";
     default: return "hystcomp:unknownStatus";
     }
 }

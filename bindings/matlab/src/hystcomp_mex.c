@@ -248,16 +248,21 @@ static void cmd_compensate(int nlhs, mxArray *plhs[], int nrhs, const mxArray *p
     }
 }
 
-/* hystcomp_mex('compensator_new', model, method, limits) -> id. */
+/* hystcomp_mex('compensator_new', model, method, limits, allow_unstable_delay) -> id. A plain
+ * delayed method whose loop can oscillate (gain >= 1) is refused (hystcomp:unstableDelay)
+ * unless allow_unstable_delay is true. */
 static void cmd_compensator_new(int nlhs, mxArray *plhs[], int nrhs, const mxArray *prhs[]) {
     double lo, hi;
     char *method = string(prhs[2], "the method");
     int use_limits = limits_arg(nrhs, prhs, 3, &lo, &hi);
+    int flags = (nrhs > 4 && flag(prhs[4], "AllowUnstableDelay")) ? HYSTCOMP_ALLOW_UNSTABLE_DELAY
+                                                                   : 0;
     /* Allocated before the compensator exists, so that no error can leak it. */
     mxArray *id = mxCreateNumericMatrix(1, 1, mxUINT64_CLASS, mxREAL);
     HystcompModel *model = model_from(prhs[1]);
     HystcompCompensator *c = NULL;
-    int status = hystcomp_compensator_from_model(model, method, lo, hi, use_limits, &c);
+    int status =
+        hystcomp_compensator_from_model_with(model, method, lo, hi, use_limits, flags, &c);
     (void)nlhs;
     hystcomp_model_free(model);
     if (status != HYSTCOMP_STATUS_OK) {
@@ -328,7 +333,7 @@ static void cmd_compensator_diagnostics(int nlhs, mxArray *plhs[], int nrhs,
     if (status != HYSTCOMP_STATUS_OK) {
         fail_status(status);
     }
-    /* Only wihc and wihc-delayed have a delayed loop gain; the others answer
+    /* Only the delayed and guarded loops have a delayed loop gain; the others answer
      * INVALID_ARGUMENT, which here means "not applicable". */
     if (hystcomp_compensator_delayed_loop_gain(c, &gain) != HYSTCOMP_STATUS_OK) {
         gain = mxGetNaN();
@@ -423,8 +428,8 @@ static const Entry COMMANDS[] = {
     {"predict", 2, 2, 1, cmd_predict, "hystcomp.predict(model, x)"},
     {"compensate", 3, 4, 2, cmd_compensate,
      "hystcomp.compensate(model, method, yd, [v_min v_max])"},
-    {"compensator_new", 2, 3, 1, cmd_compensator_new,
-     "hystcomp.Compensator(model, method, [v_min v_max])"},
+    {"compensator_new", 2, 4, 1, cmd_compensator_new,
+     "hystcomp.Compensator(model, method, [v_min v_max], 'AllowUnstableDelay', false)"},
     {"compensator_step", 2, 2, 1, cmd_compensator_step, "c.step(yd)"},
     {"compensator_process", 2, 2, 1, cmd_compensator_process, "c.process(yd)"},
     {"compensator_reset", 1, 1, 0, cmd_compensator_reset, "c.reset()"},

@@ -105,9 +105,26 @@ end
 inverse = hystcomp.load_model(fullfile(root, 'models', 'table2-inverse.json'));
 [v, d] = hystcomp.compensate(inverse, 'dihc', yd, [1 9]);
 check(all(v >= 1 & v <= 9) && isequal(d.limits, [1 9]), 'dihc limits');
-c = hystcomp.Compensator(model, 'wihc-delayed');
+% Table 1's delayed WIHC loop gain is 1.66: the plain loop can ring, so it is refused unless
+% allowed explicitly; the guarded loop cannot ring and is built.
+try
+    hystcomp.Compensator(model, 'wihc-delayed');
+    error('test:failed', 'an unstable delayed loop was built without the override');
+catch e
+    check(strcmp(e.identifier, 'hystcomp:unstableDelay') && ~isempty(strfind(e.message, '1.659')), ...
+          'unstable delay refusal: %s %s', e.identifier, e.message);
+end
+c = hystcomp.Compensator(model, 'wihc-delayed', [], 'AllowUnstableDelay', true);
 d = c.diagnostics();
 check(abs(d.delayed_loop_gain - 1.66) < 0.01, 'Table 1 delayed WIHC loop gain %g', d.delayed_loop_gain);
+v = c.process(yd);
+check(all(v >= 0 & v <= 10), 'the allowed delayed WIHC leaves its limits');
+delete(c);
+c = hystcomp.Compensator(model, 'wihc-guarded');
+v = c.process(yd);
+d = c.diagnostics();
+check(all(v >= 0 & v <= 10) && d.loop_saturated == 0, 'guarded WIHC: limits or loop clamps (%d)', ...
+      d.loop_saturated);
 delete(c);
 note = sprintf('IHC and WIHC within %.1e um', worst);
 end
@@ -319,6 +336,8 @@ cases = {
     @() hystcomp.Compensator(),                      'hystcomp:nargin'
     @() hystcomp.Compensator(model),                 'hystcomp:nargin'
     @() hystcomp.Compensator(model, 'ihc', [], 4),   'hystcomp:nargin'
+    @() hystcomp.Compensator(model, 'ihc', [], 'Fast', true), 'hystcomp:unknownOption'
+    @() hystcomp.Compensator(model, 'wihc-delayed', [], 'AllowUnstableDelay', 'yes'), 'hystcomp:wrongType'
     @() c.step(),                                    'hystcomp:nargin'
     @() c.step(1, 2),                                'hystcomp:nargin'
     @() c.reset(1),                                  'hystcomp:nargin'
@@ -448,7 +467,7 @@ check(isempty(strfind(out, 'warning')), 'the S-function compiles with warnings: 
 plant = fullfile(root, 'models', 'table1-plant.json');
 yd = 37.5 + 20 * sin(2 * pi * (0:1e-4:0.5)');
 yd(100) = NaN; % a sensor glitch: held, not propagated
-for method = {'ihc', 'wihc-delayed'}
+for method = {'ihc', 'wihc-guarded'}
     [v, ts] = sfun_harness(plant, method{1}, [0 10], 1e-4, yd);
     c = hystcomp.Compensator(plant, method{1}, [0 10]);
     expected = [c.process(yd(1:99)); NaN; c.process(yd(101:end))];
