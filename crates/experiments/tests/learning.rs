@@ -147,8 +147,9 @@ fn noise_five_times_the_default_is_not_amplified_over_fifty_trials() {
 
 /// The 20 um triangle raster at 100 Hz (corners rounded over 5 % of the period), 20 periods
 /// per trial from rest, the last measured. Without a vibration link the learning stays below
-/// the 800 Hz resonance (Q's default cut-off, 100 Hz), and the amplifier slews at its current
-/// limit in most samples: the 0.1 % is not reached (measured, README and report).
+/// the 800 Hz resonance (Q's default cut-off, 100 Hz), so the triangle's harmonics are not
+/// learned: the 0.1 % is not reached from this model (measured, README and report;
+/// from the full pipeline's model it is, see the study's test).
 /// Asserted: it learns what it can (e_rms below half of trial 0's) and stays stable.
 #[test]
 fn raster_at_100_hz_improves_and_stays_stable() {
