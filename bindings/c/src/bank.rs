@@ -5,11 +5,11 @@ use std::ffi::{c_char, c_int};
 use std::panic::{AssertUnwindSafe, catch_unwind};
 
 use hystcomp_io::bank::{Channel, MAX_CHANNELS, ModelSet, ModelSetError, ScaledBank};
-use hystcomp_io::compensator::{Method, UnstableDelay};
 
 use crate::HystcompStatus;
-use crate::args::{check_array, clear_out, doubles, handle, path_arg, put_handle, str_arg};
+use crate::args::{check_array, clear_out, doubles, handle, path_arg, put_handle};
 use crate::boundary::{Failure, boundary, model_file_status};
+use crate::compensator::{method_arg, unstable_delay};
 use crate::model::{HystcompModel, model_arg};
 
 /// The most channels a bank holds: 65 536 (`hystcomp_io::bank::MAX_CHANNELS`), checked before
@@ -64,16 +64,6 @@ unsafe fn limits_arg(
     Ok(Some(values.chunks_exact(2).map(|p| (p[0], p[1])).collect()))
 }
 
-fn unstable_arg(flags: c_int) -> Result<UnstableDelay, Failure> {
-    match flags {
-        0 => Ok(UnstableDelay::Refuse),
-        crate::HYSTCOMP_ALLOW_UNSTABLE_DELAY => Ok(UnstableDelay::Allow),
-        other => Err(Failure::invalid(format!(
-            "flags {other} are not known; give 0 or HYSTCOMP_ALLOW_UNSTABLE_DELAY (1)"
-        ))),
-    }
-}
-
 /// Creates a bank from a model set, in each channel's physical units: desired positions in
 /// (e.g. um), drive voltages out (e.g. V), one per channel.
 ///
@@ -107,11 +97,11 @@ pub unsafe extern "C" fn hystcomp_bank_from_model_set(
     boundary(|| {
         // SAFETY: `out` is valid or NULL (the caller's contract).
         unsafe { clear_out(out) }?;
-        let unstable = unstable_arg(flags)?;
+        let unstable = unstable_delay(flags)?;
         // SAFETY: NUL-terminated or NULL (the caller's contract).
         let path = unsafe { path_arg(path, "path") }?;
         // SAFETY: as above.
-        let method: Method = unsafe { str_arg(method, "method") }?.parse()?;
+        let method = unsafe { method_arg(method) }?;
         let set = ModelSet::load(&path)?;
         // SAFETY: `2 * limits_len` doubles or NULL (the caller's contract).
         let limits = unsafe { limits_arg(limits, limits_len, set.len()) }?;
@@ -145,9 +135,9 @@ pub unsafe extern "C" fn hystcomp_bank_from_models(
     boundary(|| {
         // SAFETY: `out` is valid or NULL (the caller's contract).
         unsafe { clear_out(out) }?;
-        let unstable = unstable_arg(flags)?;
+        let unstable = unstable_delay(flags)?;
         // SAFETY: NUL-terminated or NULL (the caller's contract).
-        let method: Method = unsafe { str_arg(method, "method") }?.parse()?;
+        let method = unsafe { method_arg(method) }?;
         if models.is_null() {
             return Err(Failure::null("models"));
         }

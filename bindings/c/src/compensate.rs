@@ -2,12 +2,12 @@
 
 use std::ffi::{c_char, c_int};
 
-use hystcomp_io::compensator::{Method, ScaledCompensator, UnstableDelay};
+use hystcomp_io::compensator::{ScaledCompensator, UnstableDelay};
 
 use crate::HystcompCompensator;
-use crate::args::{check_array, clear_out, non_finite_failure, put_handle, str_arg, write_out};
+use crate::args::{check_array, clear_out, non_finite_failure, put_handle, write_out};
 use crate::boundary::{Failure, boundary};
-use crate::compensator::unstable_delay;
+use crate::compensator::{method_arg, scaled, unstable_delay};
 use crate::model::{HystcompModel, model_arg};
 
 /// What a compensator did to a signal (`hystcomp_compensate`), counted over the signal, and the
@@ -42,14 +42,8 @@ unsafe fn build(
     unstable: UnstableDelay,
 ) -> Result<ScaledCompensator, Failure> {
     // SAFETY: NUL-terminated or NULL (the caller's contract).
-    let method: Method = unsafe { str_arg(method, "method") }?.parse()?;
-    let limits = (use_limits != 0).then_some((v_min, v_max));
-    Ok(ScaledCompensator::with_unstable_delay(
-        &model.file,
-        method,
-        limits,
-        unstable,
-    )?)
+    let method = unsafe { method_arg(method) }?;
+    scaled(&model.file, method, v_min, v_max, use_limits, unstable)
 }
 
 /// Creates a compensator from a model in memory, in its physical units: desired position in,
@@ -73,26 +67,8 @@ pub unsafe extern "C" fn hystcomp_compensator_from_model(
     use_limits: c_int,
     out: *mut *mut HystcompCompensator,
 ) -> c_int {
-    boundary(|| {
-        // SAFETY: `out` is valid or NULL (the caller's contract).
-        unsafe { clear_out(out) }?;
-        // SAFETY: a live handle or NULL (the caller's contract).
-        let model = unsafe { model_arg(m) }?;
-        // SAFETY: NUL-terminated or NULL (the caller's contract).
-        let inner = unsafe {
-            build(
-                model,
-                method,
-                v_min,
-                v_max,
-                use_limits,
-                UnstableDelay::Refuse,
-            )
-        }?;
-        // SAFETY: `out` was checked non-NULL by `clear_out` and is valid for a write.
-        unsafe { put_handle(out, HystcompCompensator { inner }) };
-        Ok(())
-    })
+    // SAFETY: the same contract.
+    unsafe { hystcomp_compensator_from_model_with(m, method, v_min, v_max, use_limits, 0, out) }
 }
 
 /// As `hystcomp_compensator_from_model`, with `flags`: 0, or `HYSTCOMP_ALLOW_UNSTABLE_DELAY`

@@ -7,8 +7,8 @@ use hystcomp_io::compensator::{Method, ScaledCompensator, UnstableDelay};
 use hystcomp_io::model_file::{Direction, ModelFile, ModelFileError};
 
 use crate::args::{
-    clear_out, handle, non_finite_failure, normalised_scale, parameters, path_arg, run_signal,
-    str_arg, write_out,
+    clear_out, handle, non_finite_failure, normalised_scale, parameters, path_arg, put_handle,
+    run_signal, str_arg, write_out,
 };
 use crate::boundary::{Failure, boundary};
 use crate::{HYSTCOMP_ALLOW_UNSTABLE_DELAY, HystcompStatus};
@@ -81,15 +81,39 @@ pub unsafe extern "C" fn hystcomp_compensator_from_model_file_with(
         // SAFETY: NUL-terminated or NULL (the caller's contract).
         let path = unsafe { path_arg(path, "path") }?;
         // SAFETY: NUL-terminated or NULL (the caller's contract).
-        let method: Method = unsafe { str_arg(method, "method") }?.parse()?;
+        let method = unsafe { method_arg(method) }?;
         let file = ModelFile::load(&path)?;
-        let limits = (use_limits != 0).then_some((v_min, v_max));
-        let inner = ScaledCompensator::with_unstable_delay(&file, method, limits, unstable)?;
-        let boxed = Box::into_raw(Box::new(HystcompCompensator { inner }));
+        let inner = scaled(&file, method, v_min, v_max, use_limits, unstable)?;
         // SAFETY: `out` was checked non-NULL by `clear_out` and is valid for a write.
-        unsafe { out.write(boxed) };
+        unsafe { put_handle(out, HystcompCompensator { inner }) };
         Ok(())
     })
+}
+
+/// The method named by the NUL-terminated string `method` (`"ihc"`, `"wihc-guarded"`, ...).
+///
+/// # Safety
+/// `method` must be a NUL-terminated string or NULL.
+pub(crate) unsafe fn method_arg(method: *const c_char) -> Result<Method, Failure> {
+    // SAFETY: NUL-terminated or NULL (the caller's contract).
+    Ok(unsafe { str_arg(method, "method") }?.parse()?)
+}
+
+/// The compensator `method` of `file` within `[v_min, v_max]` when `use_limits != 0`,
+/// otherwise the range the model was identified on: the one construction behind the file and
+/// in-memory constructors and `hystcomp_compensate`.
+pub(crate) fn scaled(
+    file: &ModelFile,
+    method: Method,
+    v_min: f64,
+    v_max: f64,
+    use_limits: c_int,
+    unstable: UnstableDelay,
+) -> Result<ScaledCompensator, Failure> {
+    let limits = (use_limits != 0).then_some((v_min, v_max));
+    Ok(ScaledCompensator::with_unstable_delay(
+        file, method, limits, unstable,
+    )?)
 }
 
 /// The override the flags ask for.
@@ -167,9 +191,8 @@ pub unsafe extern "C" fn hystcomp_compensator_from_parameters(
             other => Failure::from(other),
         })?;
         let inner = ScaledCompensator::new(&file, method, Some((v_min, v_max)))?;
-        let boxed = Box::into_raw(Box::new(HystcompCompensator { inner }));
         // SAFETY: `out` was checked non-NULL by `clear_out` and is valid for a write.
-        unsafe { out.write(boxed) };
+        unsafe { put_handle(out, HystcompCompensator { inner }) };
         Ok(())
     })
 }
