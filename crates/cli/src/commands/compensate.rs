@@ -170,28 +170,19 @@ pub fn run(args: &Args, ctx: Context) -> Result<(), CliError> {
             "samples",
         )?;
     }
-    let unstable = if args.allow_unstable_delay {
-        UnstableDelay::Allow
-    } else {
-        UnstableDelay::Refuse
-    };
-    let mut compensator =
-        ScaledCompensator::with_options(&model, args.method, args.limits, args.preview, unstable)
-            .map_err(|e| build_error(e, args.method).context(args.model.display()))?;
-    let stage = match &args.stage {
-        Some(path) => hystcomp_stage::StageConfig::from_toml_file(path)
-            .map_err(|e| CliError::input(e.to_string()).context(path.display()))?,
-        None => hystcomp_stage::StageConfig::default(),
-    };
-    let options = ReadOptions {
-        delimiter: args.delimiter,
-        header: args.header,
-        rows: None,
-    };
+    let mut compensator = ScaledCompensator::with_options(
+        &model,
+        args.method,
+        args.limits,
+        args.preview,
+        args.unstable_delay(),
+    )
+    .map_err(|e| build_error(e, args.method).context(args.model.display()))?;
+    let stage = args.stage()?;
     let columns = data::read_columns(
         &args.trajectory,
         &[args.time_column.clone(), args.desired_column.clone()],
-        &options,
+        &args.read_options(),
     )?;
     let (time, desired) = (&columns.values[0], &columns.values[1]);
     data::check_time_increasing(time)
@@ -279,21 +270,14 @@ pub fn run(args: &Args, ctx: Context) -> Result<(), CliError> {
         saturated: diagnostics.saturated + diagnostics.loop_saturated,
         unreachable: diagnostics.saturated,
         loop_saturated: diagnostics.loop_saturated,
-        first_saturated_time_s: match (first_unreachable, first_loop) {
-            (Some(a), Some(b)) => Some(a.min(b)),
-            (a, b) => a.or(b),
-        },
+        first_saturated_time_s: earliest(first_unreachable, first_loop),
         first_unreachable_time_s: first_unreachable,
         first_loop_saturated_time_s: first_loop,
         delayed_loop_gain: compensator.delayed_loop_gain(),
         guard_relaxation: compensator.guard_relaxation(),
         allow_unstable_delay: args.allow_unstable_delay,
         desired_range: compensator.desired_range(),
-        control_range: control
-            .iter()
-            .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), &v| {
-                (lo.min(v), hi.max(v))
-            }),
+        control_range: range(&control),
         preview: p,
         feasibility: hystcomp_stage::feasibility_held(
             &stage,
@@ -324,9 +308,7 @@ pub fn run(args: &Args, ctx: Context) -> Result<(), CliError> {
         errln!(
             "hystcomp: warning: the stage's amplifier cannot deliver this drive as asked ({}): \
              {}; slow the trajectory down or reduce its amplitude",
-            args.stage
-                .as_ref()
-                .map_or("the built-in stage".to_owned(), |p| p.display().to_string()),
+            args.stage_name(),
             report.feasibility.summary()
         );
     }
@@ -340,13 +322,75 @@ pub fn run(args: &Args, ctx: Context) -> Result<(), CliError> {
     if problems.is_empty() {
         return Ok(());
     }
-    let mut message = problems.join(". Also, ");
-    if args.allow_saturation {
+    clamped(problems.join(". Also, "), "", args.allow_saturation)
+}
+
+impl Args {
+    /// Whether a delayed loop that can oscillate on the model is run
+    /// (`--allow-unstable-delay`) or refused.
+    fn unstable_delay(&self) -> UnstableDelay {
+        if self.allow_unstable_delay {
+            UnstableDelay::Allow
+        } else {
+            UnstableDelay::Refuse
+        }
+    }
+
+    /// The stage whose amplifier the drive is checked against: `--stage`, or the built-in one.
+    fn stage(&self) -> Result<hystcomp_stage::StageConfig, CliError> {
+        match &self.stage {
+            Some(path) => hystcomp_stage::StageConfig::from_toml_file(path)
+                .map_err(|e| CliError::input(e.to_string()).context(path.display())),
+            None => Ok(hystcomp_stage::StageConfig::default()),
+        }
+    }
+
+    /// That stage, as the feasibility warning names it.
+    fn stage_name(&self) -> String {
+        self.stage
+            .as_ref()
+            .map_or("the built-in stage".to_owned(), |p| p.display().to_string())
+    }
+
+    /// How the trajectory file is read (every row).
+    fn read_options(&self) -> ReadOptions {
+        ReadOptions {
+            delimiter: self.delimiter,
+            header: self.header,
+            rows: None,
+        }
+    }
+}
+
+/// The earlier of two optional times.
+fn earliest(a: Option<f64>, b: Option<f64>) -> Option<f64> {
+    match (a, b) {
+        (Some(a), Some(b)) => Some(a.min(b)),
+        (a, b) => a.or(b),
+    }
+}
+
+/// Smallest and largest of `values` (`(inf, -inf)` when empty).
+fn range(values: &[f64]) -> (f64, f64) {
+    values
+        .iter()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), &v| {
+            (lo.min(v), hi.max(v))
+        })
+}
+
+/// The end of a run whose drive was clamped: a warning with `--allow-saturation`, else the
+/// error `message` followed by `advice` (empty, or ending in "; ") and the flag that accepts
+/// it, with the exit status for saturation.
+fn clamped(mut message: String, advice: &str, allow_saturation: bool) -> Result<(), CliError> {
+    if allow_saturation {
         errln!("hystcomp: warning: {message}");
         Ok(())
     } else {
+        message.push_str("; ");
+        message.push_str(advice);
         message.push_str(
-            "; --allow-saturation accepts the clamped output with exit status 0 (the drive file \
+            "--allow-saturation accepts the clamped output with exit status 0 (the drive file \
              is written either way)",
         );
         Err(CliError::with_code(message, EXIT_SATURATED))

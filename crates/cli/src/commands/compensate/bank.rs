@@ -8,12 +8,11 @@
 //! time, one `drive_NAME_UNIT` column per channel, then one `desired_NAME_UNIT` per channel.
 
 use hystcomp_io::bank::{ModelSet, ScaledBank};
-use hystcomp_io::compensator::{Method, UnstableDelay};
+use hystcomp_io::compensator::Method;
 use hystcomp_io::data::{self, Column, ReadOptions};
 use serde::Serialize;
 
-use super::{Args, build_error};
-use crate::error::EXIT_SATURATED;
+use super::{Args, build_error, clamped, earliest, range};
 use crate::{CliError, Context};
 
 /// What `compensate` reports for one channel of a bank.
@@ -99,14 +98,9 @@ pub(super) fn run(args: &Args, ctx: Context) -> Result<(), CliError> {
              of each channel only",
         ));
     }
-    let unstable = if args.allow_unstable_delay {
-        UnstableDelay::Allow
-    } else {
-        UnstableDelay::Refuse
-    };
     let limits = args.limits.map(|l| vec![l]);
-    let mut bank =
-        ScaledBank::new(&set, args.method, limits.as_deref(), unstable).map_err(|e| match e {
+    let mut bank = ScaledBank::new(&set, args.method, limits.as_deref(), args.unstable_delay())
+        .map_err(|e| match e {
             hystcomp_io::bank::ModelSetError::Channel {
                 channel,
                 name,
@@ -117,16 +111,8 @@ pub(super) fn run(args: &Args, ctx: Context) -> Result<(), CliError> {
             )),
             other => CliError::input(other.to_string()),
         })?;
-    let stage = match &args.stage {
-        Some(path) => hystcomp_stage::StageConfig::from_toml_file(path)
-            .map_err(|e| CliError::input(e.to_string()).context(path.display()))?,
-        None => hystcomp_stage::StageConfig::default(),
-    };
-    let options = ReadOptions {
-        delimiter: args.delimiter,
-        header: args.header,
-        rows: None,
-    };
+    let stage = args.stage()?;
+    let options = args.read_options();
     let columns_wanted = desired_columns(args, &set, &options)?;
     let mut wanted = columns_wanted.clone();
     wanted.insert(0, args.time_column.clone());
@@ -216,11 +202,7 @@ pub(super) fn run(args: &Args, ctx: Context) -> Result<(), CliError> {
             loop_saturated: d.loop_saturated,
             first_unreachable_time_s: first_unreachable[c],
             first_loop_saturated_time_s: first_loop[c],
-            control_range: control[c]
-                .iter()
-                .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), &v| {
-                    (lo.min(v), hi.max(v))
-                }),
+            control_range: range(&control[c]),
             feasibility: hystcomp_stage::feasibility(&stage, &control[c])
                 .map_err(|e| CliError::input(e.to_string()))?,
         });
@@ -275,9 +257,7 @@ pub(super) fn run(args: &Args, ctx: Context) -> Result<(), CliError> {
             "hystcomp: warning: the stage's amplifier cannot deliver the drive of channel(s) {} \
              as asked ({}); slow the trajectory down or reduce its amplitude",
             infeasible.join(", "),
-            args.stage
-                .as_ref()
-                .map_or("the built-in stage".to_owned(), |p| p.display().to_string()),
+            args.stage_name(),
         );
     }
     let problems: Vec<String> = report
@@ -285,10 +265,8 @@ pub(super) fn run(args: &Args, ctx: Context) -> Result<(), CliError> {
         .iter()
         .filter(|r| r.saturated > 0)
         .map(|r| {
-            let first = match (r.first_unreachable_time_s, r.first_loop_saturated_time_s) {
-                (Some(a), Some(b)) => a.min(b),
-                (a, b) => a.or(b).unwrap_or(f64::NAN),
-            };
+            let first = earliest(r.first_unreachable_time_s, r.first_loop_saturated_time_s)
+                .unwrap_or(f64::NAN);
             format!(
                 "channel {}: {} of {} drives clamped to the limits {:.4} .. {:.4} {} ({} out of \
                  reach, {} by the delayed loop; first at t = {first} s)",
@@ -306,16 +284,9 @@ pub(super) fn run(args: &Args, ctx: Context) -> Result<(), CliError> {
     if problems.is_empty() {
         return Ok(());
     }
-    let mut message = problems.join("; ");
-    if args.allow_saturation {
-        errln!("hystcomp: warning: {message}");
-        Ok(())
-    } else {
-        message.push_str(
-            "; scale the trajectory into the stages' range or widen --limits; \
-             --allow-saturation accepts the clamped output with exit status 0 (the drive file \
-             is written either way)",
-        );
-        Err(CliError::with_code(message, EXIT_SATURATED))
-    }
+    clamped(
+        problems.join("; "),
+        "scale the trajectory into the stages' range or widen --limits; ",
+        args.allow_saturation,
+    )
 }
