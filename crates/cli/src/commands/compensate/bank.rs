@@ -9,7 +9,7 @@
 
 use hystcomp_io::bank::{ModelSet, ScaledBank};
 use hystcomp_io::compensator::Method;
-use hystcomp_io::data::{self, Column, ReadOptions};
+use hystcomp_io::data::{self, Column, Columns, ReadOptions};
 use serde::Serialize;
 
 use super::{Args, build_error, clamped, earliest, range};
@@ -49,14 +49,21 @@ struct Report {
     allow_unstable_delay: bool,
 }
 
-/// The desired columns for `set` (see the module documentation).
-fn desired_columns(
+/// The trajectory's time column then its desired columns for `set` (see the module
+/// documentation). The file is read once: when it has the columns named after the channels,
+/// the read that finds them is the record.
+fn read_trajectory(
     args: &Args,
     set: &ModelSet,
     options: &ReadOptions,
-) -> Result<Vec<Column>, CliError> {
+) -> Result<Columns, CliError> {
+    let read = |desired: Vec<Column>| {
+        let mut wanted = vec![args.time_column.clone()];
+        wanted.extend(desired);
+        data::read_columns(&args.trajectory, &wanted, options)
+    };
     let channels = set.len();
-    if let Some(columns) = &args.desired_columns {
+    let desired = if let Some(columns) = &args.desired_columns {
         if columns.len() != channels {
             return Err(CliError::input(format!(
                 "--desired-columns names {} columns, but the model set {} has {channels} \
@@ -66,27 +73,30 @@ fn desired_columns(
                 set.names().join(", ")
             )));
         }
-        return Ok(columns.clone());
-    }
-    let named: Vec<Column> = set
-        .names()
-        .iter()
-        .map(|n| Column::Name((*n).to_string()))
-        .collect();
-    let mut probe = named.clone();
-    probe.insert(0, args.time_column.clone());
-    if data::read_columns(&args.trajectory, &probe, options).is_ok() {
-        return Ok(named);
-    }
-    match &args.desired_column {
-        Column::Index(first) => Ok((0..channels).map(|c| Column::Index(first + c)).collect()),
-        other => Err(CliError::input(format!(
-            "--desired-column {other} names one column, but the model set {} has {channels} \
-             channels ({}); give --desired-columns with one column per channel",
-            args.model.display(),
-            set.names().join(", ")
-        ))),
-    }
+        columns.clone()
+    } else {
+        let named = set
+            .names()
+            .iter()
+            .map(|n| Column::Name((*n).to_string()))
+            .collect();
+        if let Ok(record) = read(named) {
+            return Ok(record);
+        }
+        match &args.desired_column {
+            Column::Index(first) => (0..channels).map(|c| Column::Index(first + c)).collect(),
+            other => {
+                return Err(CliError::input(format!(
+                    "--desired-column {other} names one column, but the model set {} has \
+                     {channels} channels ({}); give --desired-columns with one column per \
+                     channel",
+                    args.model.display(),
+                    set.names().join(", ")
+                )));
+            }
+        }
+    };
+    Ok(read(desired)?)
 }
 
 /// Runs `hystcomp compensate` with a model set.
@@ -112,11 +122,7 @@ pub(super) fn run(args: &Args, ctx: Context) -> Result<(), CliError> {
             other => CliError::input(other.to_string()),
         })?;
     let stage = args.stage()?;
-    let options = args.read_options();
-    let columns_wanted = desired_columns(args, &set, &options)?;
-    let mut wanted = columns_wanted.clone();
-    wanted.insert(0, args.time_column.clone());
-    let columns = data::read_columns(&args.trajectory, &wanted, &options)?;
+    let columns = read_trajectory(args, &set, &args.read_options())?;
     let time = &columns.values[0];
     data::check_time_increasing(time)
         .map_err(|e| CliError::from(e).context(args.trajectory.display()))?;
