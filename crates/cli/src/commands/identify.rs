@@ -728,18 +728,14 @@ struct ChainOutput<'a> {
     model: &'a hystcomp_io::model_file::ModelFile,
 }
 
-/// `identify` with creep and vibration: the chain of `hystcomp_identify::chain`.
-fn run_chain(
+/// Writes the identified `model` to `--output`, its identification record naming the data
+/// file and the columns read; returns the model as written.
+fn save(
     args: &Args,
-    ctx: Context,
     loaded: &Loaded,
-    options: &IdentifyOptions,
-    chain: &hystcomp_identify::ChainOptions,
-) -> Result<(), CliError> {
-    let fit =
-        hystcomp_identify::identify_chain(&loaded.voltage, &loaded.displacement, options, chain)
-            .map_err(|e| fit_error(e, &args.data, loaded))?;
-    let mut model = fit.model.clone();
+    model: &hystcomp_io::model_file::ModelFile,
+) -> Result<hystcomp_io::model_file::ModelFile, CliError> {
+    let mut model = model.clone();
     if let Some(serde_json::Value::Object(map)) = &mut model.identification {
         map.insert(
             "data".to_owned(),
@@ -753,6 +749,21 @@ fn run_chain(
     model
         .save(&args.output)
         .map_err(|e| CliError::output(e.to_string()))?;
+    Ok(model)
+}
+
+/// `identify` with creep and vibration: the chain of `hystcomp_identify::chain`.
+fn run_chain(
+    args: &Args,
+    ctx: Context,
+    loaded: &Loaded,
+    options: &IdentifyOptions,
+    chain: &hystcomp_identify::ChainOptions,
+) -> Result<(), CliError> {
+    let fit =
+        hystcomp_identify::identify_chain(&loaded.voltage, &loaded.displacement, options, chain)
+            .map_err(|e| fit_error(e, &args.data, loaded))?;
+    let model = save(args, loaded, &fit.model)?;
     if ctx.json {
         crate::print_json(&ChainOutput {
             data: args.data.display().to_string(),
@@ -799,20 +810,7 @@ pub fn run(args: &Args, ctx: Context) -> Result<(), CliError> {
     let fit = identify_observed(&loaded.voltage, &loaded.displacement, &options, &mut bar)
         .map_err(|e| fit_error(e, &args.data, &loaded))?;
     bar.finish();
-    let mut model = fit.model.clone();
-    if let Some(serde_json::Value::Object(map)) = &mut model.identification {
-        map.insert(
-            "data".to_owned(),
-            serde_json::Value::String(args.data.display().to_string()),
-        );
-        map.insert(
-            "columns".to_owned(),
-            serde_json::Value::from(loaded.names.clone()),
-        );
-    }
-    model
-        .save(&args.output)
-        .map_err(|e| CliError::output(e.to_string()))?;
+    let model = save(args, &loaded, &fit.model)?;
     if ctx.json {
         let output = Output {
             data: args.data.display().to_string(),
