@@ -2,7 +2,7 @@
 
 use super::guard::GuardLanes;
 use super::lanes::Lanes;
-use super::plant::{all_odd_cubic, cubic_lanes, polynomial_lanes, write_counters};
+use super::plant::{all_odd_cubic, channel_lanes, cubic_lanes, polynomial_lanes, write_counters};
 use super::play::update_memory_with;
 use super::root::LaneRemainder;
 use super::run::{BlockKernel, run};
@@ -66,12 +66,7 @@ impl<T: Real, S: BankStorage<T, W>, const W: usize> DihcBank<T, S, W> {
                 .unwrap_or((T::zero(), T::one()));
             let dihc = Dihc::<T, B>::new(model, lo, hi, limits_of(limits, channel)?)
                 .map_err(|error| BankError::Channel { channel, error })?;
-            let lanes = if channel + 1 == channels {
-                channel..count * W
-            } else {
-                channel..channel + 1
-            };
-            for lane in lanes {
+            for lane in channel_lanes(channel, channels, count, W) {
                 write_dihc_lane(&mut storage, &rows, lane, &dihc);
             }
         }

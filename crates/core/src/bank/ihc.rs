@@ -2,12 +2,14 @@
 
 use super::guard::GuardLanes;
 use super::lanes::{Lanes, Mask};
-use super::plant::{all_odd_cubic, cubic_lanes, polynomial_lanes, write_lane};
+use super::plant::{
+    PlantKernel, all_odd_cubic, cubic_lanes, plant_bank, polynomial_lanes, write_lane,
+};
 use super::play::{LaneEquation, PlayState, feed, feed_solved, solve};
 use super::root::{LaneRemainder, increasing_root};
 use super::run::{BlockKernel, run};
-use super::storage::{BankStorage, Block, Blocks, PlantRows, blocks};
-use super::{BankError, CompensatorBank, LANES, check_bank_size, check_tick, limits_of};
+use super::storage::{BankStorage, Block, Blocks, PlantRows};
+use super::{BankError, CompensatorBank, LANES, check_tick};
 use crate::{Buffer, CoreError, Diagnostics, Ihc, Mpim, OutputLimits, Real, SolveMode};
 
 type L<T, const W: usize> = Lanes<T, W>;
@@ -33,16 +35,11 @@ pub struct IhcBank<T: Real, S: BankStorage<T, W>, const W: usize = LANES> {
     channels: usize,
 }
 
-/// What every block of an IHC bank shares.
+/// Marks the [`PlantKernel`] of an IHC bank.
 #[derive(Debug, Clone, Copy)]
-struct IhcKernel {
-    rows: PlantRows,
-    mode: SolveMode,
-    /// Every channel has `rows.n` operators.
-    uniform: bool,
-    /// Every channel has the paper's odd cubic.
-    cubic: bool,
-}
+pub(crate) struct IhcMethod;
+
+type IhcKernel = PlantKernel<IhcMethod>;
 
 impl<T: Real, S: BankStorage<T, W>, const W: usize> IhcBank<T, S, W> {
     /// A bank of one IHC per plant model, with `limits` for every channel (one pair shared by
@@ -53,45 +50,26 @@ impl<T: Real, S: BankStorage<T, W>, const W: usize> IhcBank<T, S, W> {
         limits: &[OutputLimits<T>],
         mode: SolveMode,
     ) -> Result<Self, BankError> {
-        check_bank_size(plants.len(), limits.len())?;
-        let n = plants.iter().map(Mpim::len).max().unwrap_or(0);
-        let degree = plants
-            .iter()
-            .map(|p| p.input_polynomial().degree())
-            .fold(super::PLAIN_DEGREE, usize::max);
-        let rows = PlantRows::new(n, degree);
-        let count = blocks(plants.len(), W);
-        let mut storage = Blocks::<T, S, W>::new(count, rows.values, PlantRows::COUNTS)
-            .map_err(BankError::Bank)?;
-        for (channel, plant) in plants.iter().enumerate() {
-            let ihc = Ihc::<T, B>::new(plant, limits_of(limits, channel)?, mode)
-                .map_err(|error| BankError::Channel { channel, error })?;
-            // The padding lanes after the last channel copy it (they are fed NaN: held).
-            let lanes = if channel + 1 == plants.len() {
-                channel..count * W
-            } else {
-                channel..channel + 1
-            };
-            for lane in lanes {
+        let (blocks, kernel) = plant_bank(
+            plants,
+            limits,
+            mode,
+            |plant, limits, mode| Ihc::<T, B>::new(plant, limits, mode),
+            |blocks, rows, lane, c: &Ihc<T, B>| {
                 write_lane(
-                    &mut storage,
-                    &rows,
+                    blocks,
+                    rows,
                     lane,
-                    &ihc.inverse,
-                    &ihc.input,
-                    ihc.relaxation,
-                    &ihc.guard,
-                );
-            }
-        }
-        Ok(IhcBank {
-            blocks: storage,
-            kernel: IhcKernel {
-                rows,
-                mode,
-                uniform: plants.iter().all(|p| p.len() == n),
-                cubic: plants.iter().all(|p| p.input_polynomial().is_odd_cubic()),
+                    &c.inverse,
+                    &c.input,
+                    c.relaxation,
+                    &c.guard,
+                )
             },
+        )?;
+        Ok(IhcBank {
+            blocks,
+            kernel,
             channels: plants.len(),
         })
     }
@@ -256,7 +234,7 @@ impl<T: Real, const W: usize> LaneEquation<T, W> for ReachControl<T, W> {
     }
 }
 
-impl IhcKernel {
+impl PlantKernel<IhcMethod> {
     /// One sample of every lane with the remainder `h` (`crate::ihc::ihc_step`).
     #[inline(always)]
     fn step_with<T: Real, R: LaneRemainder<T, W>, const W: usize>(
@@ -351,7 +329,7 @@ impl IhcKernel {
     }
 }
 
-impl<T: Real, const W: usize> BlockKernel<T, W> for IhcKernel {
+impl<T: Real, const W: usize> BlockKernel<T, W> for PlantKernel<IhcMethod> {
     #[inline(always)]
     fn step(&self, block: &mut Block<'_, T, W>, desired: L<T, W>) -> L<T, W> {
         let first = self.rows.coefficient(0);

@@ -4,11 +4,86 @@
 use super::lanes::{Lanes, Mask};
 use super::root::{CubicLanes, PolynomialLanes};
 use super::storage::{
-    BankStorage, Block, Blocks, LOOP_SATURATED, NON_FINITE, PlantRows, SATURATED,
+    BankStorage, Block, Blocks, LOOP_SATURATED, NON_FINITE, PlantRows, SATURATED, blocks,
 };
+use super::{BankError, check_bank_size, limits_of};
 use crate::compensator::OutputGuard;
 use crate::walk::PlayBank;
-use crate::{Buffer, InputPolynomial, MAX_INPUT_DEGREE, Real};
+use crate::{
+    Buffer, CoreError, InputPolynomial, MAX_INPUT_DEGREE, Mpim, OutputLimits, Real, SolveMode,
+};
+use core::marker::PhantomData;
+use core::ops::Range;
+
+/// What every block of an IHC or WIHC bank shares; `M` names the method
+/// ([`super::ihc::IhcMethod`], [`super::wihc::WihcMethod`]), whose kernel steps the blocks.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct PlantKernel<M> {
+    pub rows: PlantRows,
+    pub mode: SolveMode,
+    /// Every channel has `rows.n` operators.
+    pub uniform: bool,
+    /// Every channel has the paper's odd cubic.
+    pub cubic: bool,
+    method: PhantomData<M>,
+}
+
+/// The lanes channel `channel` of `channels` fills in `count` blocks of `W` lanes: its own,
+/// and for the last channel also the padding lanes after it (they are fed NaN: held).
+pub(crate) fn channel_lanes(
+    channel: usize,
+    channels: usize,
+    count: usize,
+    lanes: usize,
+) -> Range<usize> {
+    if channel + 1 == channels {
+        channel..count * lanes
+    } else {
+        channel..channel + 1
+    }
+}
+
+/// The blocks and kernel of an IHC or WIHC bank: channel `c` is the single compensator
+/// `build` makes from `plants[c]` with its limits and `mode` (a refused one named by its
+/// index), written into its lanes by `write`.
+pub(crate) fn plant_bank<T, S, B, C, M, const W: usize>(
+    plants: &[Mpim<T, B>],
+    limits: &[OutputLimits<T>],
+    mode: SolveMode,
+    build: impl Fn(&Mpim<T, B>, OutputLimits<T>, SolveMode) -> Result<C, CoreError>,
+    write: impl Fn(&mut Blocks<T, S, W>, &PlantRows, usize, &C),
+) -> Result<(Blocks<T, S, W>, PlantKernel<M>), BankError>
+where
+    T: Real,
+    S: BankStorage<T, W>,
+    B: Buffer<T>,
+{
+    check_bank_size(plants.len(), limits.len())?;
+    let n = plants.iter().map(Mpim::len).max().unwrap_or(0);
+    let degree = plants
+        .iter()
+        .map(|p| p.input_polynomial().degree())
+        .fold(super::PLAIN_DEGREE, usize::max);
+    let rows = PlantRows::new(n, degree);
+    let count = blocks(plants.len(), W);
+    let mut storage =
+        Blocks::<T, S, W>::new(count, rows.values, PlantRows::COUNTS).map_err(BankError::Bank)?;
+    for (channel, plant) in plants.iter().enumerate() {
+        let compensator = build(plant, limits_of(limits, channel)?, mode)
+            .map_err(|error| BankError::Channel { channel, error })?;
+        for lane in channel_lanes(channel, plants.len(), count, W) {
+            write(&mut storage, &rows, lane, &compensator);
+        }
+    }
+    let kernel = PlantKernel {
+        rows,
+        mode,
+        uniform: plants.iter().all(|p| p.len() == n),
+        cubic: plants.iter().all(|p| p.input_polynomial().is_odd_cubic()),
+        method: PhantomData,
+    };
+    Ok((storage, kernel))
+}
 
 /// Writes the state of one single-channel IHC or WIHC (its play-operator bank, input
 /// polynomial, guard relaxation and output guard) into lane `lane` of `blocks`: the bank then

@@ -3,12 +3,14 @@
 use super::guard::GuardLanes;
 use super::ihc::{plant_limits, rounding_tolerance};
 use super::lanes::{Lanes, Mask};
-use super::plant::{all_odd_cubic, cubic_lanes, polynomial_lanes, write_lane};
+use super::plant::{
+    PlantKernel, all_odd_cubic, cubic_lanes, plant_bank, polynomial_lanes, write_lane,
+};
 use super::play::{LaneEquation, LaneSolution, PlayState, feed, feed_solved_or_full, solve};
 use super::root::{LaneRemainder, increasing_root};
 use super::run::{BlockKernel, run};
-use super::storage::{BankStorage, Block, Blocks, PlantRows, blocks};
-use super::{BankError, CompensatorBank, LANES, check_bank_size, check_tick, limits_of};
+use super::storage::{BankStorage, Block, Blocks, PlantRows};
+use super::{BankError, CompensatorBank, LANES, check_tick};
 use crate::{Buffer, CoreError, Diagnostics, Mpim, OutputLimits, Real, SolveMode, Wihc};
 
 type L<T, const W: usize> = Lanes<T, W>;
@@ -23,14 +25,11 @@ pub struct WihcBank<T: Real, S: BankStorage<T, W>, const W: usize = LANES> {
     channels: usize,
 }
 
-/// What every block of a WIHC bank shares.
+/// Marks the [`PlantKernel`] of a WIHC bank.
 #[derive(Debug, Clone, Copy)]
-struct WihcKernel {
-    rows: PlantRows,
-    mode: SolveMode,
-    uniform: bool,
-    cubic: bool,
-}
+pub(crate) struct WihcMethod;
+
+type WihcKernel = PlantKernel<WihcMethod>;
 
 impl<T: Real, S: BankStorage<T, W>, const W: usize> WihcBank<T, S, W> {
     /// A bank of one WIHC per plant model, with `limits` for every channel (one pair shared by
@@ -41,44 +40,26 @@ impl<T: Real, S: BankStorage<T, W>, const W: usize> WihcBank<T, S, W> {
         limits: &[OutputLimits<T>],
         mode: SolveMode,
     ) -> Result<Self, BankError> {
-        check_bank_size(plants.len(), limits.len())?;
-        let n = plants.iter().map(Mpim::len).max().unwrap_or(0);
-        let degree = plants
-            .iter()
-            .map(|p| p.input_polynomial().degree())
-            .fold(super::PLAIN_DEGREE, usize::max);
-        let rows = PlantRows::new(n, degree);
-        let count = blocks(plants.len(), W);
-        let mut storage = Blocks::<T, S, W>::new(count, rows.values, PlantRows::COUNTS)
-            .map_err(BankError::Bank)?;
-        for (channel, plant) in plants.iter().enumerate() {
-            let wihc = Wihc::<T, B>::new(plant, limits_of(limits, channel)?, mode)
-                .map_err(|error| BankError::Channel { channel, error })?;
-            let lanes = if channel + 1 == plants.len() {
-                channel..count * W
-            } else {
-                channel..channel + 1
-            };
-            for lane in lanes {
+        let (blocks, kernel) = plant_bank(
+            plants,
+            limits,
+            mode,
+            |plant, limits, mode| Wihc::<T, B>::new(plant, limits, mode),
+            |blocks, rows, lane, c: &Wihc<T, B>| {
                 write_lane(
-                    &mut storage,
-                    &rows,
+                    blocks,
+                    rows,
                     lane,
-                    &wihc.bank,
-                    &wihc.input,
-                    wihc.relaxation,
-                    &wihc.guard,
-                );
-            }
-        }
-        Ok(WihcBank {
-            blocks: storage,
-            kernel: WihcKernel {
-                rows,
-                mode,
-                uniform: plants.iter().all(|p| p.len() == n),
-                cubic: plants.iter().all(|p| p.input_polynomial().is_odd_cubic()),
+                    &c.bank,
+                    &c.input,
+                    c.relaxation,
+                    &c.guard,
+                )
             },
+        )?;
+        Ok(WihcBank {
+            blocks,
+            kernel,
             channels: plants.len(),
         })
     }
@@ -175,7 +156,7 @@ impl<T: Real, R: LaneRemainder<T, W>, const W: usize> LaneEquation<T, W> for Eq9
     }
 }
 
-impl WihcKernel {
+impl PlantKernel<WihcMethod> {
     /// One sample of every lane with the remainder `h` (`crate::wihc::wihc_step`).
     #[inline(always)]
     fn step_with<T: Real, R: LaneRemainder<T, W>, const W: usize>(
@@ -263,7 +244,7 @@ impl WihcKernel {
     }
 }
 
-impl<T: Real, const W: usize> BlockKernel<T, W> for WihcKernel {
+impl<T: Real, const W: usize> BlockKernel<T, W> for PlantKernel<WihcMethod> {
     #[inline(always)]
     fn step(&self, block: &mut Block<'_, T, W>, desired: L<T, W>) -> L<T, W> {
         let first = self.rows.coefficient(0);
