@@ -315,6 +315,20 @@ pub struct Loaded {
     pub names: Vec<String>,
 }
 
+impl ColumnArgs {
+    /// Reads the record `path` with these options' own columns and rows (see [`load`]).
+    pub fn load(&self, path: &Path) -> Result<Loaded, CliError> {
+        load(
+            path,
+            self,
+            &self.voltage_column,
+            &self.displacement_column,
+            self.time_column.as_ref(),
+            self.rows,
+        )
+    }
+}
+
 /// Reads the voltage, displacement and (optional) time columns of `path`, with the file's
 /// name in every message; checks that time increases.
 pub fn load(
@@ -790,14 +804,7 @@ fn run_chain(
 pub fn run(args: &Args, ctx: Context) -> Result<(), CliError> {
     args.fit.check_sizes()?;
     let c = &args.columns;
-    let loaded = load(
-        &args.data,
-        c,
-        &c.voltage_column,
-        &c.displacement_column,
-        c.time_column.as_ref(),
-        c.rows,
-    )?;
+    let loaded = c.load(&args.data)?;
     let options = args.fit.options(c, args.direction, args.holdout, &loaded)?;
     if let Some(chain) = args.chain.options(c, &loaded)? {
         return run_chain(args, ctx, &loaded, &options, &chain);

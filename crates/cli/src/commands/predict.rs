@@ -8,7 +8,7 @@ use hystcomp_io::data;
 use hystcomp_io::model_file::{Direction, ModelFile};
 use serde::Serialize;
 
-use super::identify::{ColumnArgs, load};
+use super::identify::ColumnArgs;
 use crate::files::{Files, NamesFiles};
 use crate::{CliError, Context};
 
@@ -64,14 +64,7 @@ struct Report {
 pub fn run(args: &Args, ctx: Context) -> Result<(), CliError> {
     let model = ModelFile::load(&args.model)?;
     let c = &args.columns;
-    let loaded = load(
-        &args.data,
-        c,
-        &c.voltage_column,
-        &c.displacement_column,
-        c.time_column.as_ref(),
-        c.rows,
-    )?;
+    let loaded = c.load(&args.data)?;
     let (input, measured, input_unit, output_unit) = match model.direction {
         Direction::Plant => (
             &loaded.voltage,
