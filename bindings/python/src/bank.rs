@@ -145,6 +145,12 @@ impl CompensatorBank {
     fn lock(&self) -> MutexGuard<'_, ScaledBank> {
         self.inner.lock().unwrap_or_else(|p| p.into_inner())
     }
+
+    /// `value` of every channel, in channel order, under one lock.
+    fn per_channel<T>(&self, value: impl Fn(&ScaledBank, usize) -> T) -> Vec<T> {
+        let bank = self.lock();
+        (0..bank.channels()).map(|c| value(&bank, c)).collect()
+    }
 }
 
 #[pymethods]
@@ -287,41 +293,27 @@ impl CompensatorBank {
     /// ``(min, max)`` drive limits of every channel, each in its ``control_units``.
     #[getter]
     fn limits(&self) -> Vec<(f64, f64)> {
-        let bank = self.lock();
-        (0..bank.channels())
-            .map(|c| bank.limits(c).unwrap_or_default())
-            .collect()
+        self.per_channel(|bank, c| bank.limits(c).unwrap_or_default())
     }
 
     /// Every channel's unit of the desired position, e.g. ``"um"``.
     #[getter]
     fn desired_units(&self) -> Vec<String> {
-        let bank = self.lock();
-        (0..bank.channels())
-            .map(|c| bank.desired_unit(c).unwrap_or_default().to_string())
-            .collect()
+        self.per_channel(|bank, c| bank.desired_unit(c).unwrap_or_default().to_string())
     }
 
     /// Every channel's unit of the drive, e.g. ``"V"``.
     #[getter]
     fn control_units(&self) -> Vec<String> {
-        let bank = self.lock();
-        (0..bank.channels())
-            .map(|c| bank.control_unit(c).unwrap_or_default().to_string())
-            .collect()
+        self.per_channel(|bank, c| bank.control_unit(c).unwrap_or_default().to_string())
     }
 
     /// Every channel's counters since the last reset, a list of ``Diagnostics`` (as
     /// ``Compensator.diagnostics``).
     #[getter]
     fn diagnostics<'py>(&self, py: Python<'py>) -> PyResult<Vec<Bound<'py, PyAny>>> {
-        let all: Vec<_> = {
-            let bank = self.lock();
-            (0..bank.channels())
-                .map(|c| bank.diagnostics(c).unwrap_or_default())
-                .collect()
-        };
-        all.into_iter()
+        self.per_channel(|bank, c| bank.diagnostics(c).unwrap_or_default())
+            .into_iter()
             .map(|d| {
                 let data = dict(
                     py,
