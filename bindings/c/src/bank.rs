@@ -193,10 +193,19 @@ pub unsafe extern "C" fn hystcomp_bank_channels(
     })
 }
 
-/// Counts the non-finite values of a tick.
+/// Counts the non-finite values of a tick, and the index of the first (0 when none), in one
+/// pass.
 fn non_finite(values: &[f64]) -> (usize, usize) {
-    let first = values.iter().position(|x| !x.is_finite()).unwrap_or(0);
-    (values.iter().filter(|x| !x.is_finite()).count(), first)
+    let (mut count, mut first) = (0, 0);
+    for (k, x) in values.iter().enumerate() {
+        if !x.is_finite() {
+            if count == 0 {
+                first = k;
+            }
+            count += 1;
+        }
+    }
+    (count, first)
 }
 
 /// One control tick: `v[c]` is the drive for the desired position `y_d[c]` of channel `c`,
@@ -280,10 +289,11 @@ unsafe fn tick(
         .ok_or_else(|| Failure::invalid(format!("samples {samples} is impossibly large")))?;
     check_array(y_d, len, "y_d")?;
     check_array(v, len, "v")?;
+    let in_place = std::ptr::eq(y_d, v);
     let (mut count, mut first) = (0, 0);
     for k in 0..samples {
         let at = k * channels;
-        if std::ptr::eq(y_d, v) {
+        if in_place {
             // SAFETY: `v` valid for `len` reads and writes (the caller's contract), non-NULL
             // and aligned (checked), `at + channels <= len`; no other reference to it.
             let values = unsafe { std::slice::from_raw_parts_mut(v.add(at), channels) };
