@@ -47,25 +47,32 @@ const BANK_LABELS: [&str; 2] = ["IHC bank", "DIHC bank"];
 /// The bank rows of `docs/microcontroller.md`: `(target bytes, host bytes)` of the six-channel
 /// IHC and DIHC banks.
 fn documented_bank_ram_bytes() -> Vec<(usize, usize)> {
-    let doc = std::fs::read_to_string(workspace_root().join("docs/microcontroller.md"))
-        .expect("docs/microcontroller.md exists");
+    let doc = microcontroller_doc();
     BANK_LABELS
         .iter()
-        .map(|label| {
-            let prefix = format!("| {label} | 6 x 10 |");
-            let line = doc
-                .lines()
-                .find(|l| l.starts_with(&prefix))
-                .unwrap_or_else(|| panic!("docs/microcontroller.md has no row {prefix}"));
-            let cells: Vec<usize> = line
-                .split('|')
-                .skip(3)
-                .filter_map(|c| c.trim().parse().ok())
-                .collect();
-            assert!(cells.len() >= 2, "row {line:?} needs target and host bytes");
-            (cells[0], cells[1])
-        })
+        .map(|label| documented_row(&doc, &format!("| {label} | 6 x 10 |")))
         .collect()
+}
+
+/// `docs/microcontroller.md`'s text.
+fn microcontroller_doc() -> String {
+    std::fs::read_to_string(workspace_root().join("docs/microcontroller.md"))
+        .expect("docs/microcontroller.md exists")
+}
+
+/// The `(target bytes, host bytes)` of the row of `doc` that begins with `prefix`.
+fn documented_row(doc: &str, prefix: &str) -> (usize, usize) {
+    let line = doc
+        .lines()
+        .find(|l| l.starts_with(prefix))
+        .unwrap_or_else(|| panic!("docs/microcontroller.md has no row {prefix}"));
+    let cells: Vec<usize> = line
+        .split('|')
+        .skip(3)
+        .filter_map(|c| c.trim().parse().ok())
+        .collect();
+    assert!(cells.len() >= 2, "row {line:?} needs target and host bytes");
+    (cells[0], cells[1])
 }
 
 #[test]
@@ -86,23 +93,11 @@ fn ram_of_the_six_axis_banks_on_the_host_is_the_documented_one() {
 /// The RAM table of `docs/microcontroller.md`: `(label, n) -> (target bytes, host bytes)`, in
 /// the order of [`host_ram_bytes`].
 fn documented_ram_bytes() -> Vec<(usize, usize)> {
-    let doc = std::fs::read_to_string(workspace_root().join("docs/microcontroller.md"))
-        .expect("docs/microcontroller.md exists");
+    let doc = microcontroller_doc();
     let mut rows = Vec::new();
     for n in [10, 100] {
         for label in LABELS {
-            let prefix = format!("| {label} | {n} |");
-            let line = doc
-                .lines()
-                .find(|l| l.starts_with(&prefix))
-                .unwrap_or_else(|| panic!("docs/microcontroller.md has no row {prefix}"));
-            let cells: Vec<usize> = line
-                .split('|')
-                .skip(3)
-                .filter_map(|c| c.trim().parse().ok())
-                .collect();
-            assert!(cells.len() >= 2, "row {line:?} needs target and host bytes");
-            rows.push((cells[0], cells[1]));
+            rows.push(documented_row(&doc, &format!("| {label} | {n} |")));
         }
     }
     rows
