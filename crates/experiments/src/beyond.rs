@@ -12,10 +12,11 @@ use std::fmt;
 use hystcomp_identify::Contribution;
 use serde::Serialize;
 
+use crate::TrackingIndices;
 use crate::duration::{DurationStudy, HoldRun};
 use crate::speed::SpeedStudy;
 use crate::study::{FULL_IHC_LABEL, Study};
-use crate::{TrackingIndices, study_report::AcceptanceCheck};
+use crate::study_report::{AcceptanceCheck, write_targets};
 
 /// The `full` pipeline's summary.
 #[derive(Debug, Clone, Serialize)]
@@ -266,23 +267,6 @@ impl fmt::Display for BeyondSummary {
                 writeln!(f)?;
             }
         }
-        let misses = self.checks.iter().filter(|c| !c.passed).count();
-        writeln!(
-            f,
-            "issue 11 targets (reported, not counted): {} of {} met",
-            self.checks.len() - misses,
-            self.checks.len()
-        )?;
-        for c in &self.checks {
-            writeln!(
-                f,
-                "  {} {} = {:.3} ({})",
-                if c.passed { "met " } else { "MISS" },
-                c.what,
-                c.value,
-                c.bound
-            )?;
-        }
-        Ok(())
+        write_targets(f, 11, &self.checks, |v| format!("{v:.3}"))
     }
 }

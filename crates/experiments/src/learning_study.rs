@@ -32,7 +32,7 @@ use crate::learning::run_trials;
 use crate::signals::{PaperTrajectory, Raster, Shape, Signal};
 use crate::speed::{RASTER_ROUNDING, RASTER_UM};
 use crate::study::{EXACT_IHC_LABEL, FULL_IHC_LABEL, StudyError};
-use crate::study_report::AcceptanceCheck;
+use crate::study_report::{AcceptanceCheck, write_targets};
 
 /// Trials of the paper's trajectory: trial 0 and ten learned ones.
 pub const PAPER_TRIALS: usize = 11;
@@ -298,24 +298,7 @@ impl std::fmt::Display for LearningStudy {
             }
             writeln!(f)?;
         }
-        let misses = self.checks.iter().filter(|c| !c.passed).count();
-        writeln!(
-            f,
-            "issue 12 targets (reported, not counted): {} of {} met",
-            self.checks.len() - misses,
-            self.checks.len()
-        )?;
-        for c in &self.checks {
-            writeln!(
-                f,
-                "  {} {} = {:.4} % ({})",
-                if c.passed { "met " } else { "MISS" },
-                c.what,
-                c.value,
-                c.bound
-            )?;
-        }
-        Ok(())
+        write_targets(f, 12, &self.checks, |v| format!("{v:.4} %"))
     }
 }
 

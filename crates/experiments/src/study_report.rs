@@ -125,6 +125,34 @@ pub struct AcceptanceCheck {
     pub passed: bool,
 }
 
+/// Writes an issue's targets as text: `issue N targets (reported, not counted): M of T met`,
+/// then one line per check (`met ` or `MISS`, what, the value as `value` writes it, the bound).
+pub(crate) fn write_targets(
+    f: &mut fmt::Formatter<'_>,
+    issue: u32,
+    checks: &[AcceptanceCheck],
+    value: impl Fn(f64) -> String,
+) -> fmt::Result {
+    let misses = checks.iter().filter(|c| !c.passed).count();
+    writeln!(
+        f,
+        "issue {issue} targets (reported, not counted): {} of {} met",
+        checks.len() - misses,
+        checks.len()
+    )?;
+    for c in checks {
+        writeln!(
+            f,
+            "  {} {} = {} ({})",
+            if c.passed { "met " } else { "MISS" },
+            c.what,
+            value(c.value),
+            c.bound
+        )?;
+    }
+    Ok(())
+}
+
 fn run_summary(run: &TrackingRun) -> RunSummary {
     RunSummary {
         label: run.label.clone(),
