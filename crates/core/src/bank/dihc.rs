@@ -161,17 +161,12 @@ impl<T: Real, S: BankStorage<T, W>, const W: usize> CompensatorBank<T> for DihcB
     }
 
     fn limits(&self, channel: usize) -> Option<OutputLimits<T>> {
-        if channel >= self.channels {
-            return None;
-        }
-        let rows = &self.kernel.rows;
-        let min = self
-            .blocks
-            .value(channel, rows.scalar(InverseRows::LIMIT_MIN));
-        let max = self
-            .blocks
-            .value(channel, rows.scalar(InverseRows::LIMIT_MAX));
-        OutputLimits::new(min, max).ok()
+        super::limits_at(
+            &self.blocks,
+            self.kernel.rows.limits(),
+            channel,
+            self.channels,
+        )
     }
 
     fn diagnostics(&self, channel: usize) -> Option<Diagnostics> {

@@ -108,27 +108,17 @@ impl<T: Real, S: BankStorage<T, W>, const W: usize> CompensatorBank<T> for IhcBa
     }
 
     fn limits(&self, channel: usize) -> Option<OutputLimits<T>> {
-        plant_limits(&self.blocks, &self.kernel.rows, channel, self.channels)
+        super::limits_at(
+            &self.blocks,
+            self.kernel.rows.limits(),
+            channel,
+            self.channels,
+        )
     }
 
     fn diagnostics(&self, channel: usize) -> Option<Diagnostics> {
         super::diagnostics_of(&self.blocks, channel, self.channels)
     }
-}
-
-/// The limits of `channel` of an IHC or WIHC bank.
-pub(crate) fn plant_limits<T: Real, S: BankStorage<T, W>, const W: usize>(
-    blocks: &Blocks<T, S, W>,
-    rows: &PlantRows,
-    channel: usize,
-    channels: usize,
-) -> Option<OutputLimits<T>> {
-    if channel >= channels {
-        return None;
-    }
-    let min = blocks.value(channel, rows.scalar(PlantRows::LIMIT_MIN));
-    let max = blocks.value(channel, rows.scalar(PlantRows::LIMIT_MAX));
-    OutputLimits::new(min, max).ok()
 }
 
 /// Exact IHC on one segment of every lane (`crate::ihc::Eq5Exact`):

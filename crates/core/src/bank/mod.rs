@@ -234,6 +234,22 @@ pub(crate) fn check_signal(
     Ok(())
 }
 
+/// The output limits of `channel`, stored in the value rows `min_row` and `max_row` (`None`
+/// beyond the last channel).
+pub(crate) fn limits_at<T: Real, S: BankStorage<T, W>, const W: usize>(
+    blocks: &Blocks<T, S, W>,
+    (min_row, max_row): (usize, usize),
+    channel: usize,
+    channels: usize,
+) -> Option<OutputLimits<T>> {
+    if channel >= channels {
+        return None;
+    }
+    let min = blocks.value(channel, min_row);
+    let max = blocks.value(channel, max_row);
+    OutputLimits::new(min, max).ok()
+}
+
 /// The diagnostics of `channel` (`None` beyond the last channel).
 pub(crate) fn diagnostics_of<T: Real, S: BankStorage<T, W>, const W: usize>(
     blocks: &Blocks<T, S, W>,

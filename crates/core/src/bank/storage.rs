@@ -149,6 +149,10 @@ impl PlantRows {
     pub const fn scalar(&self, which: usize) -> usize {
         5 * self.n + which
     }
+    /// The rows of the output limits `(min, max)`.
+    pub const fn limits(&self) -> (usize, usize) {
+        (self.scalar(Self::LIMIT_MIN), self.scalar(Self::LIMIT_MAX))
+    }
     /// Row of `c_{j + 1}`.
     pub const fn coefficient(&self, j: usize) -> usize {
         5 * self.n + Self::SCALARS + j
@@ -201,6 +205,10 @@ impl InverseRows {
     }
     pub const fn scalar(&self, which: usize) -> usize {
         3 * self.n + which
+    }
+    /// The rows of the output limits `(min, max)`.
+    pub const fn limits(&self) -> (usize, usize) {
+        (self.scalar(Self::LIMIT_MIN), self.scalar(Self::LIMIT_MAX))
     }
     pub const fn coefficient(&self, j: usize) -> usize {
         3 * self.n + Self::SCALARS + j

@@ -1,7 +1,7 @@
 //! A bank of WIHC channels (section 3.2, eq. (9)): [`crate::Wihc`] lane by lane.
 
 use super::guard::GuardLanes;
-use super::ihc::{plant_limits, rounding_tolerance};
+use super::ihc::rounding_tolerance;
 use super::lanes::{Lanes, Mask};
 use super::plant::{
     PlantKernel, all_odd_cubic, cubic_lanes, plant_bank, polynomial_lanes, write_lane,
@@ -98,7 +98,12 @@ impl<T: Real, S: BankStorage<T, W>, const W: usize> CompensatorBank<T> for WihcB
     }
 
     fn limits(&self, channel: usize) -> Option<OutputLimits<T>> {
-        plant_limits(&self.blocks, &self.kernel.rows, channel, self.channels)
+        super::limits_at(
+            &self.blocks,
+            self.kernel.rows.limits(),
+            channel,
+            self.channels,
+        )
     }
 
     fn diagnostics(&self, channel: usize) -> Option<Diagnostics> {
