@@ -10,7 +10,7 @@ use hystcomp_learn::{
 };
 
 use crate::HystcompStatus;
-use crate::args::{clear_out, doubles, handle, put_handle};
+use crate::args::{clear_out, doubles, handle, put_handle, write_out};
 use crate::boundary::{Failure, boundary};
 use crate::model::{HystcompModel, model_arg};
 
@@ -460,12 +460,8 @@ pub unsafe extern "C" fn hystcomp_learner_samples(
     boundary(|| {
         // SAFETY: a live handle or NULL.
         let learner = unsafe { h.as_ref() }.ok_or_else(|| Failure::null("learner handle"))?;
-        if n.is_null() {
-            return Err(Failure::null("n"));
-        }
-        // SAFETY: non-NULL, valid for one write.
-        unsafe { n.write(learner.inner.desired().len()) };
-        Ok(())
+        // SAFETY: valid for one write or NULL (checked by write_out).
+        unsafe { write_out(n, learner.inner.desired().len(), "n") }
     })
 }
 
@@ -481,9 +477,6 @@ pub unsafe extern "C" fn hystcomp_learner_law(
     boundary(|| {
         // SAFETY: a live handle or NULL.
         let learner = unsafe { h.as_ref() }.ok_or_else(|| Failure::null("learner handle"))?;
-        if out.is_null() {
-            return Err(Failure::null("out"));
-        }
         let law = learner.inner.law();
         let value = HystcompLearningLaw {
             gain: law.gain,
@@ -496,9 +489,8 @@ pub unsafe extern "C" fn hystcomp_learner_law(
             v_min: law.limits.0,
             v_max: law.limits.1,
         };
-        // SAFETY: non-NULL, valid for one write.
-        unsafe { out.write(value) };
-        Ok(())
+        // SAFETY: valid for one write or NULL (checked by write_out).
+        unsafe { write_out(out, value, "out") }
     })
 }
 
