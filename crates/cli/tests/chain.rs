@@ -307,29 +307,15 @@ fn identify_compensate_and_crossval_take_the_full_model() {
 
 #[test]
 fn on_the_real_record_the_full_model_predicts_no_worse_than_hysteresis_alone() {
-    let (Some(train), Some(test)) = (
-        hystcomp_testkit::dbo_record("Model_Vi_Do.dat"),
-        hystcomp_testkit::dbo_record("Test_Vi_Do_Di.dat"),
-    ) else {
+    let Some((train, test)) = dbo_records() else {
         return;
     };
     let run = |structure: &str| {
-        let out = hystcomp(&[
-            "--json",
-            "crossval",
-            "--train",
-            s(&train),
-            "--test",
-            s(&test),
-            "--voltage-column",
-            "1",
-            "--displacement-column",
-            "5",
-            "--sample-rate",
-            "200",
-            "--model-structure",
-            structure,
-        ]);
+        let out = dbo_crossval(
+            &train,
+            &test,
+            &["--sample-rate", "200", "--model-structure", structure],
+        );
         assert!(out.status.success(), "{}", stderr(&out));
         serde_json::from_slice::<serde_json::Value>(&out.stdout).unwrap()
     };

@@ -354,24 +354,10 @@ fn saved_models_never_overwrite_a_record_or_each_other() {
 
 #[test]
 fn dbo_records_cross_validate_within_sane_bounds() {
-    let (Some(train), Some(test)) = (
-        hystcomp_testkit::dbo_record("Model_Vi_Do.dat"),
-        hystcomp_testkit::dbo_record("Test_Vi_Do_Di.dat"),
-    ) else {
+    let Some((train, test)) = dbo_records() else {
         return;
     };
-    let out = hystcomp(&[
-        "--json",
-        "crossval",
-        "--train",
-        s(&train),
-        "--test",
-        s(&test),
-        "--voltage-column",
-        "1",
-        "--displacement-column",
-        "5",
-    ]);
+    let out = dbo_crossval(&train, &test, &[]);
     assert!(out.status.success(), "{}", stderr(&out));
     let doc: Value = serde_json::from_slice(&out.stdout).unwrap();
     let report = &doc["report"];
@@ -447,26 +433,10 @@ fn dbo_records_cross_validate_within_sane_bounds() {
 /// stderr and is one of the candidates.
 #[test]
 fn dbo_crossval_with_n_auto_replays_the_best_compensator_within_1_2_percent() {
-    let (Some(train), Some(test)) = (
-        hystcomp_testkit::dbo_record("Model_Vi_Do.dat"),
-        hystcomp_testkit::dbo_record("Test_Vi_Do_Di.dat"),
-    ) else {
+    let Some((train, test)) = dbo_records() else {
         return;
     };
-    let out = hystcomp(&[
-        "--json",
-        "crossval",
-        "--train",
-        s(&train),
-        "--test",
-        s(&test),
-        "--voltage-column",
-        "1",
-        "--displacement-column",
-        "5",
-        "-n",
-        "auto",
-    ]);
+    let out = dbo_crossval(&train, &test, &["-n", "auto"]);
     assert!(out.status.success(), "{}", stderr(&out));
     let said = stderr(&out);
     assert!(

@@ -42,3 +42,34 @@ pub fn assert_fails(args: &[&str], fragments: &[&str]) {
         assert!(message.contains(fragment), "{fragment:?} not in: {message}");
     }
 }
+
+/// The two records of the shared DBO data, to train on (`Model_Vi_Do.dat`) and to test on
+/// (`Test_Vi_Do_Di.dat`); `None`, the skip said, without the shared data.
+pub fn dbo_records() -> Option<(PathBuf, PathBuf)> {
+    match (
+        hystcomp_testkit::dbo_record("Model_Vi_Do.dat"),
+        hystcomp_testkit::dbo_record("Test_Vi_Do_Di.dat"),
+    ) {
+        (Some(train), Some(test)) => Some((train, test)),
+        _ => None,
+    }
+}
+
+/// Runs `hystcomp --json crossval` trained on `train` and tested on `test`, the DBO records'
+/// columns (voltage 1, displacement 5), then `extra`.
+pub fn dbo_crossval(train: &Path, test: &Path, extra: &[&str]) -> Output {
+    let mut args = vec![
+        "--json",
+        "crossval",
+        "--train",
+        s(train),
+        "--test",
+        s(test),
+        "--voltage-column",
+        "1",
+        "--displacement-column",
+        "5",
+    ];
+    args.extend(extra);
+    hystcomp(&args)
+}
