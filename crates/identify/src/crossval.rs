@@ -45,9 +45,10 @@ pub struct CrossvalOptions {
     /// plant model and an inverse model are identified).
     pub identify: IdentifyOptions,
     /// Samples at the start of the test record left out of the errors (all compensators and
-    /// the forward model start from their reset state at the first test sample). `Auto` ends
-    /// at the first sample whose voltage is within 5 % of the test record's voltage range from
-    /// its minimum (see [`Warmup::Auto`]).
+    /// the forward model start from their reset state at the first test sample). `Auto` (and
+    /// `Estimate`) ends at the first sample whose voltage is within
+    /// [`AUTO_WARMUP_LEVEL`](crate::AUTO_WARMUP_LEVEL) (5 %) of the test record's voltage range
+    /// from its minimum (identification's [`Warmup::Auto`] is stricter).
     pub test_warmup: Warmup,
     /// Whether the plain delayed compensators (`ihc-delayed`, `wihc-delayed`) are replayed
     /// even when their loop gain over the limits is 1 or more (by default they are reported as
@@ -211,7 +212,8 @@ pub fn validate_models(
     }
     let samples = test.voltage.len();
     let start = match warmup {
-        Warmup::Auto => auto_warmup(test.voltage),
+        // Nothing is fitted on the test record: estimating its memory means nothing there.
+        Warmup::Auto | Warmup::Estimate => auto_warmup(test.voltage),
         Warmup::Samples(n) => n,
     };
     if start >= samples {

@@ -11,8 +11,9 @@ use crate::options::{
     AUTO_WARMUP_LEVEL, MAX_REGRESSOR_VALUES, MIN_CORRELATION, SAMPLES_PER_PARAMETER,
 };
 use crate::report::{
-    DelayedConstraint, DelayedGains, ErrorStats, FitReport, SampleCounts, SignalRange,
+    DelayedConstraint, DelayedGains, ErrorStats, FitReport, SampleCounts, SignalRange, WarmupReport,
 };
+use crate::warmup::{MEMORY_TOLERANCE, estimate_history, memory_known_from};
 use crate::{
     FitProblem, IdentifyError, IdentifyOptions, LeastSquares, Method, NoObserver, Observer,
     OutputOffset, Parameters, ParticleSwarm, ProblemData, Solver, Warmup,
@@ -45,7 +46,9 @@ pub fn identify(
 ///
 /// 1. The model input and output are chosen by [`IdentifyOptions::direction`]: voltage to
 ///    displacement for a plant model, displacement to voltage for an inverse (DIHC) model.
-/// 2. The warm-up ([`Warmup`]) and the hold-out are excluded from the fit; the fitted samples
+/// 2. The warm-up ([`Warmup`]: by default up to where the operators' memory becomes known, or
+///    none with the initial memory estimated) and the hold-out are excluded from the fit; the
+///    fitted samples
 ///    must have a displacement that rises with the voltage (Pearson correlation at least
 ///    [`MIN_CORRELATION`](crate::MIN_CORRELATION), and not exactly 1, which only the same
 ///    column given twice produces).
@@ -55,7 +58,8 @@ pub fn identify(
 ///    fractions of the fitted input range (eq. (11)) and every "% of the output range" refers
 ///    to the fitted output range `(output - offset) / (max - min)`, with the offset of
 ///    [`OutputOffset`]. The operators still run over the whole record from zero memory
-///    (eq. (1)), warm-up included; warm-up and hold-out samples may fall outside `[0, 1]`.
+///    (eq. (1)), warm-up included (with [`Warmup::Estimate`], from the memory of the estimated
+///    virtual history); warm-up and hold-out samples may fall outside `[0, 1]`.
 /// 4. The chosen solver minimises the RMS error under the invertibility constraints of
 ///    [`FitProblem`]; the model is then checked by the core (`check_invertible` on `[0, 1]`,
 ///    and for a plant model the IHC of eq. (7) and the delayed WIHC of eq. (9) are built).
@@ -117,8 +121,10 @@ pub fn identify_observed(
             ),
         });
     }
+    let known_from = memory_known_from(voltage);
     let warmup = match options.warmup {
-        Warmup::Auto => auto_warmup(voltage),
+        Warmup::Auto => known_from,
+        Warmup::Estimate => 0,
         Warmup::Samples(n) => n.min(total),
     };
     let after_warmup = total - warmup;
@@ -169,17 +175,38 @@ pub fn identify_observed(
     let x: Vec<f64> = input.iter().map(|v| (v - x_min) / x_scale).collect();
     let y: Vec<f64> = output.iter().map(|v| (v - y_reference) / y_scale).collect();
 
-    let problem = FitProblem::new(
-        ProblemData {
-            input: &x,
-            output: &y,
-            fit: fit.clone(),
-        },
-        &thresholds,
-        options.direction,
-        fit_offset,
-        options.margin,
-    )?;
+    let build = |data: ProblemData<'_>| {
+        FitProblem::new(
+            data,
+            &thresholds,
+            options.direction,
+            fit_offset,
+            options.margin,
+        )
+    };
+    // The virtual history run before the first sample: estimated with the parameters, or none
+    // (zero memory, eq. (1)). Once the memory is known from the first sample, every history
+    // gives the same memory: nothing to estimate.
+    let history: Vec<f64> = match options.warmup {
+        Warmup::Estimate if known_from > 0 => estimate_history(&x, &y, fit.clone(), &build)?.0,
+        _ => Vec::new(),
+    };
+    let shift = history.len();
+    let (x_run, y_run) = if shift == 0 {
+        (x.clone(), y.clone())
+    } else {
+        (
+            history.iter().chain(&x).copied().collect::<Vec<f64>>(),
+            std::iter::repeat_n(0.0, shift)
+                .chain(y.iter().copied())
+                .collect::<Vec<f64>>(),
+        )
+    };
+    let problem = build(ProblemData {
+        input: &x_run,
+        output: &y_run,
+        fit: fit.start + shift..fit.end + shift,
+    })?;
     // For delayed compensation: the same problem with both delayed loops' gains bounded, and
     // what the bound costs (the least-squares optimum without those rows, and its gains).
     let (problem, delayed_constraint) = match options.delayed_loop_bound {
@@ -253,6 +280,10 @@ pub fn identify_observed(
     // Errors of the model itself (the core's MPIM over the whole record), physical units.
     let output_offset = y_reference + parameters.offset * y_scale;
     let mut run = model.clone();
+    for &v in &history {
+        run.step(v);
+    }
+    let initial_memory = run.memory().to_vec();
     let predicted: Vec<f64> = x
         .iter()
         .map(|&v| output_offset + y_scale * run.step(v))
@@ -303,6 +334,19 @@ pub fn identify_observed(
             fit: fit_samples,
             holdout,
         },
+        warmup: Some(warmup_report(
+            options.warmup,
+            warmup,
+            known_from,
+            voltage,
+            (input_quantity, input_unit.as_str(), input[0]),
+            (!history.is_empty()).then(|| {
+                (
+                    history.iter().map(|v| x_min + x_scale * v).collect(),
+                    initial_memory,
+                )
+            }),
+        )),
         input: SignalRange {
             quantity: input_quantity.to_owned(),
             unit: input_unit.clone(),
@@ -414,13 +458,95 @@ pub(crate) fn check_rises(
     Ok(())
 }
 
-/// The first sample whose value is within [`AUTO_WARMUP_LEVEL`] of the range from the minimum.
+/// `crossval`'s automatic test warm-up: the first sample whose value is within
+/// [`AUTO_WARMUP_LEVEL`] of the range from the minimum.
 pub(crate) fn auto_warmup(voltage: &[f64]) -> usize {
     let (lo, hi) = min_max(voltage);
     voltage
         .iter()
         .position(|&v| v - lo <= AUTO_WARMUP_LEVEL * (hi - lo))
         .unwrap_or(0)
+}
+
+/// Which samples were fitted and why, for the report (`input`: the model input's quantity,
+/// unit and first value; `estimated`: the virtual history in physical input units and the
+/// memory it leaves, with [`Warmup::Estimate`]).
+fn warmup_report(
+    mode: Warmup,
+    first_fitted: usize,
+    known_from: usize,
+    voltage: &[f64],
+    input: (&str, &str, f64),
+    estimated: Option<(Vec<f64>, Vec<f64>)>,
+) -> WarmupReport {
+    let (quantity, unit, first) = input;
+    let (lo, hi) = min_max(voltage);
+    let extreme = |v: f64| {
+        if v - lo <= hi - v {
+            "minimum"
+        } else {
+            "maximum"
+        }
+    };
+    let known = if known_from == 0 {
+        format!(
+            "the record starts at its voltage {} (within {} % of the range), so the operators' \
+             memory is known from the first sample",
+            extreme(voltage[0]),
+            100.0 * MEMORY_TOLERANCE
+        )
+    } else {
+        format!(
+            "the operators' memory is unknown until sample {} (voltage {}, within {} % of the \
+             range from the record's {}), where it is fixed whatever came before (wiping-out)",
+            known_from + 1,
+            number(voltage[known_from]),
+            100.0 * MEMORY_TOLERANCE,
+            extreme(voltage[known_from])
+        )
+    };
+    let (history, initial_memory) = match estimated {
+        Some((h, m)) => (Some(h), Some(m)),
+        None => (None, None),
+    };
+    let reason = match (mode, &history) {
+        (Warmup::Auto, _) if known_from == 0 => format!("fitted from the first sample: {known}"),
+        (Warmup::Auto, _) => format!("samples 1..{known_from} left out as warm-up: {known}"),
+        (Warmup::Estimate, Some(h)) => format!(
+            "fitted from the first sample: {known}; the memory at the first sample was \
+             estimated with the parameters, as left by the {quantity} moving from {} to {} \
+             {unit} and then to its first value, {} {unit}",
+            number(h[1]),
+            number(h[2]),
+            number(first)
+        ),
+        (Warmup::Estimate, None) => {
+            format!("fitted from the first sample: {known}; nothing to estimate")
+        }
+        (Warmup::Samples(n), _) => format!(
+            "samples 1..{first_fitted} left out as asked (warm-up {n}), the operators running \
+             from zero memory at the first sample; {known}"
+        ),
+    };
+    WarmupReport {
+        mode,
+        first_fitted,
+        memory_known_from: known_from,
+        history,
+        initial_memory,
+        reason,
+    }
+}
+
+/// A number for people, 4 significant digits or so.
+fn number(v: f64) -> String {
+    let text = format!("{v:.4}");
+    let text = text.trim_end_matches('0').trim_end_matches('.');
+    if text == "-0" {
+        "0".to_owned()
+    } else {
+        text.to_owned()
+    }
 }
 
 /// Smallest and largest value (the samples are finite and not empty).

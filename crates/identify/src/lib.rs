@@ -79,6 +79,7 @@ pub mod problem;
 pub mod pso;
 mod report;
 mod solver;
+pub mod warmup;
 
 pub use chain::{
     ChainIdentification, ChainOptions, ChainReport, Contribution, CreepFit, CreepOptions,
@@ -110,6 +111,6 @@ pub use pso::{
     PsoBounds, PsoOptions,
 };
 pub use report::{
-    DelayedConstraint, DelayedGains, ErrorStats, FitReport, SampleCounts, SignalRange,
+    DelayedConstraint, DelayedGains, ErrorStats, FitReport, SampleCounts, SignalRange, WarmupReport,
 };
 pub use solver::{NoObserver, Observer, Progress, Solution, Solver};

@@ -16,8 +16,10 @@ pub const DEFAULT_MARGIN: f64 = 1e-3;
 /// The default largest condition number of the column-scaled regressor matrix.
 pub const DEFAULT_MAX_CONDITION: f64 = 1e10;
 
-/// With [`Warmup::Auto`], the warm-up ends at the first sample whose voltage is at most this
-/// fraction of the record's voltage range above its minimum.
+/// `crossval`'s automatic test warm-up ends at the first sample whose voltage is at most this
+/// fraction of the test record's voltage range above its minimum. (Identification's
+/// [`Warmup::Auto`] waits instead for the memory to become known:
+/// [`crate::warmup::MEMORY_TOLERANCE`].)
 pub const AUTO_WARMUP_LEVEL: f64 = 0.05;
 
 /// The smallest Pearson correlation between the voltage and the displacement over the fitted
@@ -133,25 +135,35 @@ impl Default for Thresholds {
     }
 }
 
-/// The samples at the start of the record excluded from the fit (the operators still run over
-/// them, from zero memory at the first sample, eq. (1)).
+/// Where the play operators' memory at the start of the record comes from, and so which
+/// samples are fitted (see [`crate::warmup`] for the reasoning).
 ///
-/// When a record starts mid-range, the real device's memory is unknown, but the model's is
-/// not: at the minimum input every one-sided play operator outputs 0 whatever its memory
-/// (eq. (2) with `x = 0` and memory `>= 0`), which is the reset state of eq. (1), and near the
-/// minimum its memory differs from that state by at most the distance to it. From the first
-/// visit near the minimum on, the model's state hardly depends on the unknown history;
-/// [`Warmup::Auto`] discards the samples before it.
+/// A record may start mid-range, after a history nobody recorded. The operators' memory is
+/// then unknown until the voltage first reaches the record's minimum or maximum: there every
+/// operator's memory is fixed whatever came before (wiping-out, provided the unknown history
+/// stayed within the record's range). The report says which samples were used and why
+/// ([`crate::FitReport::warmup`]).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
 #[serde(rename_all = "snake_case")]
 pub enum Warmup {
-    /// Up to the first sample whose voltage is within [`AUTO_WARMUP_LEVEL`] (5 %) of the
-    /// record's voltage range from its minimum (no warm-up when the record starts there). The
+    /// The warm-up ends where the memory becomes known: at the first sample where the voltage
+    /// reaches the record's minimum or maximum (no warm-up when the record starts there). The
     /// voltage decides in both directions: it drives the device's state, and it is clean,
-    /// while a displacement record may start with a transient or drift below its first minimum.
+    /// while a displacement record may start with a transient. The operators run from zero
+    /// memory at the first sample, which from that sample on gives exactly the memory any
+    /// history would.
     #[default]
     Auto,
-    /// A fixed number of samples.
+    /// Every sample is fitted, and the operators' memory at the first sample is estimated
+    /// together with the parameters: the memory left by a virtual history (the input came from
+    /// one end of the record's range to a turning point `v0`, then to the first sample),
+    /// `v0` searched by least squares ([`crate::warmup`]). Best on records that start
+    /// mid-range with a clean response; a record starting with a transient (a voltage step the
+    /// stage has not followed yet) is better served by [`Warmup::Auto`], which leaves those
+    /// samples out. The particle swarm solves with the history least squares chose.
+    Estimate,
+    /// A fixed number of samples, excluded from the fit (the operators run over them from zero
+    /// memory at the first sample).
     Samples(usize),
 }
 

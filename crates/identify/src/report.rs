@@ -125,6 +125,29 @@ pub struct SampleCounts {
     pub holdout: usize,
 }
 
+/// Which samples were fitted and where the operators' memory at the start came from
+/// ([`crate::Warmup`], [`crate::warmup`]).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct WarmupReport {
+    /// The warm-up asked for.
+    pub mode: crate::Warmup,
+    /// The first fitted sample (0-based; the warm-up's length).
+    pub first_fitted: usize,
+    /// The first sample (0-based) where the voltage reaches the record's minimum or maximum:
+    /// from there on the operators' memory is fixed by the record whatever came before.
+    pub memory_known_from: usize,
+    /// With [`crate::Warmup::Estimate`]: the virtual history run before the first sample (model
+    /// input, physical units: an end of the range, the other end, the turning point `v0`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub history: Option<Vec<f64>>,
+    /// With [`crate::Warmup::Estimate`]: each operator's memory before the first sample,
+    /// normalised (fractions of the fitted input range).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub initial_memory: Option<Vec<f64>>,
+    /// Why these samples, in a sentence for people.
+    pub reason: String,
+}
+
 /// What [`crate::identify`] did and how well the model fits. Serialisable: the command line
 /// prints it with `--json` and writes it into the model file's `identification` field.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -139,6 +162,10 @@ pub struct FitReport {
     pub thresholds: Vec<f64>,
     /// Sample counts.
     pub samples: SampleCounts,
+    /// Which samples were fitted and why; where the operators' memory came from. Reports
+    /// written before this field existed read as `None`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub warmup: Option<WarmupReport>,
     /// The model input's physical range (normalised to `[0, 1]`).
     pub input: SignalRange,
     /// The model output's physical range (its width is the output scale).

@@ -96,10 +96,15 @@ pub struct FitArgs {
         conflicts_with = "operators"
     )]
     pub thresholds: Option<Vec<f64>>,
-    /// Samples at the start excluded from the fit (the operators still run over them): a
-    /// number, or auto (up to the first sample within 5 % of the voltage range from its
-    /// minimum, where the model's memory no longer depends on the unknown history).
-    #[arg(long, default_value = "auto", value_name = "N|auto", value_parser = parse_warmup)]
+    /// Where the play operators' memory at the start comes from, and so which samples are
+    /// fitted. auto: up to the first sample where the voltage reaches the record's minimum or
+    /// maximum, where the memory becomes known whatever came before (wiping-out). estimate:
+    /// every sample fitted, the memory at the first sample estimated with the parameters (as
+    /// left by the input coming from one end of the range to a turning point, searched by
+    /// least squares); best when the record starts mid-range with a clean response, not with
+    /// a transient. A number: that many samples left out (the operators still run over them,
+    /// from zero memory). The report says which samples were used and why.
+    #[arg(long, default_value = "auto", value_name = "auto|estimate|N", value_parser = parse_warmup)]
     pub warmup: Warmup,
     /// Warm-up in seconds instead (needs --time-column or --sample-rate).
     #[arg(long, value_name = "SECONDS", conflicts_with = "warmup")]
@@ -275,10 +280,13 @@ fn parse_warmup(text: &str) -> Result<Warmup, String> {
     if text.trim().eq_ignore_ascii_case("auto") {
         return Ok(Warmup::Auto);
     }
+    if text.trim().eq_ignore_ascii_case("estimate") {
+        return Ok(Warmup::Estimate);
+    }
     text.trim()
         .parse::<usize>()
         .map(Warmup::Samples)
-        .map_err(|_| format!("expected a number of samples or auto, got {text:?}"))
+        .map_err(|_| format!("expected auto, estimate or a number of samples, got {text:?}"))
 }
 
 fn parse_offset(text: &str) -> Result<OutputOffset, String> {
@@ -711,6 +719,22 @@ pub fn print_fit(report: &hystcomp_identify::FitReport) -> Result<(), CliError> 
     Ok(())
 }
 
+/// Says on stderr which samples were fitted and why (the report's warm-up; `--json` has it
+/// in `report.warmup`).
+pub fn note_samples(report: &hystcomp_identify::FitReport) {
+    if let Some(w) = &report.warmup {
+        let s = &report.samples;
+        errln!(
+            "hystcomp: fitted samples {}..{} of {} ({} held out at the end): {}",
+            s.warmup + 1,
+            s.warmup + s.fit,
+            s.total,
+            s.holdout,
+            w.reason
+        );
+    }
+}
+
 /// A library error of a fit on `loaded` (read from `path`) for the user: the file's name, and
 /// for [`IdentifyError::SameSignal`] the two columns given.
 pub fn fit_error(error: IdentifyError, path: &Path, loaded: &Loaded) -> CliError {
@@ -817,6 +841,7 @@ pub fn run(args: &Args, ctx: Context) -> Result<(), CliError> {
     let fit = identify_observed(&loaded.voltage, &loaded.displacement, &options, &mut bar)
         .map_err(|e| fit_error(e, &args.data, &loaded))?;
     bar.finish();
+    note_samples(&fit.report);
     let model = save(args, &loaded, &fit.model)?;
     if ctx.json {
         let output = Output {
