@@ -82,7 +82,10 @@ impl Identification {
 ///   (particle swarm, as the paper; ``seed``, ``particles``, ``iterations``, ``polish``);
 /// - ``direction``: ``"plant"`` (voltage to displacement, for IHC and WIHC) or ``"inverse"``
 ///   (displacement to voltage, for DIHC);
-/// - ``warmup``: ``"auto"`` or a number of leading samples excluded from the fit;
+/// - ``warmup``: ``"auto"`` (up to where the operators' memory becomes known: the voltage
+///   within 1 % of an end of the record's range), ``"estimate"`` (every sample fitted, the
+///   memory at the first one estimated with the parameters) or a number of leading samples
+///   excluded from the fit; ``report.warmup.reason`` says which samples were used and why;
 /// - ``holdout``: the fraction of samples at the end held out of the fit and reported (0.2,
 ///   as ``hystcomp identify``; 0 fits the whole record);
 /// - ``offset``: ``"fit"`` (a constant fitted for the sensor's arbitrary zero), ``"none"`` or a
@@ -136,9 +139,10 @@ pub fn identify(
     let warmup = match warmup {
         WarmupArg::Samples(k) => Warmup::Samples(k),
         WarmupArg::Name(name) if name.trim().eq_ignore_ascii_case("auto") => Warmup::Auto,
+        WarmupArg::Name(name) if name.trim().eq_ignore_ascii_case("estimate") => Warmup::Estimate,
         WarmupArg::Name(name) => {
             return Err(invalid(format!(
-                "warmup {name:?} is unknown; give \"auto\" or a number of samples"
+                "warmup {name:?} is unknown; give \"auto\", \"estimate\" or a number of samples"
             )));
         }
     };

@@ -2,7 +2,7 @@
 
 use std::time::Instant;
 
-use hystcomp_core::{Compensator, Ihc, Mpim, OutputLimits, SolveMode, Wihc};
+use hystcomp_core::{Compensator, Ihc, OutputLimits, SolveMode, Wihc};
 use hystcomp_io::data::{check_finite, check_min_samples, check_not_constant, check_same_length};
 use hystcomp_io::model_file::{Direction, ModelFile, Scale};
 use serde::{Deserialize, Serialize};
@@ -106,7 +106,8 @@ pub fn identify_observed(
         };
     let thresholds = options.thresholds.values()?;
     let fit_offset = options.offset == OutputOffset::Fit;
-    let parameters_count = parameter_count(&thresholds, fit_offset);
+    let parameters_count =
+        parameter_count(&thresholds, fit_offset) + options.input_degree.saturating_sub(3) / 2;
     let total = input.len();
     if total.saturating_mul(thresholds.len()) > MAX_REGRESSOR_VALUES {
         return Err(IdentifyError::InvalidOption {
@@ -176,12 +177,13 @@ pub fn identify_observed(
     let y: Vec<f64> = output.iter().map(|v| (v - y_reference) / y_scale).collect();
 
     let build = |data: ProblemData<'_>| {
-        FitProblem::new(
+        FitProblem::with_input_degree(
             data,
             &thresholds,
             options.direction,
             fit_offset,
             options.margin,
+            options.input_degree,
         )
     };
     // The virtual history run before the first sample: estimated with the parameters, or none
@@ -213,13 +215,7 @@ pub fn identify_observed(
         Some(bound) if options.direction == Direction::Plant => {
             let free = LeastSquares.solve(&problem, &mut NoObserver)?;
             let free_parameters = problem.parameters(&free.theta);
-            let unconstrained_gains = Mpim::<f64, Vec<f64>>::new(
-                &thresholds,
-                &free_parameters.weights,
-                free_parameters.a1,
-                free_parameters.a2,
-            )
-            .map_or(
+            let unconstrained_gains = free_parameters.model(&thresholds).map_or(
                 DelayedGains {
                     ihc: f64::NAN,
                     wihc: f64::NAN,
@@ -260,12 +256,7 @@ pub fn identify_observed(
 
     // The core's checks: the model must be invertible on its input range, and a plant model
     // must give every compensator of the paper.
-    let model = Mpim::<f64, Vec<f64>>::new(
-        &thresholds,
-        &parameters.weights,
-        parameters.a1,
-        parameters.a2,
-    )?;
+    let model = parameters.model(&thresholds)?;
     let slope = model.check_invertible(0.0, 1.0)?;
     if options.direction == Direction::Plant {
         let limits = OutputLimits::new(0.0, 1.0)?;

@@ -104,7 +104,8 @@ pub use order::{
     AUTO_HOLDOUT, AUTO_OPERATOR_CANDIDATES, OrderCandidate, OrderSelection, select_operators,
 };
 pub use problem::{
-    Constraint, ConstraintKind, DelayedCompensator, FitProblem, Parameters, ProblemData,
+    Constraint, ConstraintKind, DelayedCompensator, FitProblem, HIGHER_DEGREE_GRID,
+    MAX_FIT_INPUT_DEGREE, Parameters, ProblemData,
 };
 pub use pso::{
     CONSTRICTION_ACCELERATION, CONSTRICTION_INERTIA, MAX_ITERATIONS, MAX_PARTICLES, ParticleSwarm,

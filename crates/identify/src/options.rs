@@ -240,10 +240,20 @@ pub struct IdentifyOptions {
     /// (the gains are reported, and `hystcomp compensate` refuses a plain delayed loop whose
     /// gain is 1 or more). Ignored for inverse models, which have no delayed loop.
     pub delayed_loop_bound: Option<f64>,
+    /// The degree of the odd input polynomial `g(x) = a2 x + a1 x^3 + c5 x^5 + ...` (eq. (3)
+    /// generalised; [`crate::FitProblem::with_input_degree`]): 3 (the paper's cubic, the
+    /// default), 5, 7 or 9. Least squares only: the particle swarm fits the cubic.
+    #[serde(default = "paper_input_degree")]
+    pub input_degree: usize,
     /// Unit of the voltage samples, written to the model file.
     pub voltage_unit: String,
     /// Unit of the displacement samples, written to the model file.
     pub displacement_unit: String,
+}
+
+/// The paper's cubic: the default input degree (serde's default for older options).
+fn paper_input_degree() -> usize {
+    3
 }
 
 impl Default for IdentifyOptions {
@@ -259,6 +269,7 @@ impl Default for IdentifyOptions {
             max_condition: DEFAULT_MAX_CONDITION,
             max_fit_rms_percent: Some(DEFAULT_MAX_FIT_RMS_PERCENT),
             delayed_loop_bound: None,
+            input_degree: 3,
             voltage_unit: "V".to_owned(),
             displacement_unit: "um".to_owned(),
         }
@@ -333,8 +344,19 @@ impl IdentifyOptions {
                 });
             }
         }
+        crate::problem::check_input_degree(self.input_degree)?;
         if let Method::ParticleSwarm(pso) = &self.method {
             pso.validate()?;
+            if self.input_degree != 3 {
+                return Err(IdentifyError::InvalidOption {
+                    option: "input degree",
+                    value: self.input_degree.to_string(),
+                    reason: "the particle swarm fits the paper's cubic only (its search \
+                             bounds are the cubic's); fit a higher degree by least squares \
+                             (method ls)"
+                        .to_owned(),
+                });
+            }
         }
         Ok(())
     }

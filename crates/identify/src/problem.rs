@@ -60,6 +60,16 @@
 //!
 //! Rows that coincide are kept once.
 //!
+//! # A higher-degree input polynomial
+//! [`FitProblem::with_input_degree`] fits the odd input polynomial
+//! `g(x) = a2 x + a1 x^3 + c_5 x^5 + ... + c_D x^D` (`D` odd, at most
+//! [`MAX_FIT_INPUT_DEGREE`]; `D = 3` is the paper's cubic) instead of the cubic: one more column
+//! `x^j` and one parameter `c_j` each, after `c` in `theta`. The constraints keep their form with
+//! `3 a1 x^2` read as `h'(x) = 3 a1 x^2 + 5 c_5 x^4 + ...`, still linear in the parameters; since
+//! the extremes of `h'` over an interval then lie where `g'' = 0`, which depends on the
+//! parameters, every interval of the branch checkpoints is also sampled at
+//! [`HIGHER_DEGREE_GRID`] inner points (the core's exact check of the identified model decides).
+//!
 //! # Extra regressors
 //! [`FitProblem::with_extra_columns`] appends columns the caller computed (the creep link's
 //! filtered outputs, see `crate::chain`) to the regressors, with one parameter each at the end
@@ -71,7 +81,7 @@
 
 use std::ops::Range;
 
-use hystcomp_core::{OneSidedPlay, branch_checkpoints};
+use hystcomp_core::{OneSidedPlay, branch_checkpoints, branch_intervals};
 use hystcomp_io::model_file::Direction;
 use nalgebra::{DMatrix, DVector};
 use serde::{Deserialize, Serialize};
@@ -91,6 +101,14 @@ pub const ACTIVE_TOLERANCE: f64 = 1e-6;
 /// [module documentation](self)).
 pub const EXTRA_ROW_SCALE: f64 = 1000.0;
 
+/// The highest degree of the input polynomial identification fits (odd degrees only:
+/// [`FitProblem::with_input_degree`]); the core's [`hystcomp_core::MAX_INPUT_DEGREE`].
+pub const MAX_FIT_INPUT_DEGREE: usize = hystcomp_core::MAX_INPUT_DEGREE;
+
+/// Inner points per interval at which the constraints of a higher-degree input polynomial are
+/// imposed besides the checkpoints of the cubic (see the [module documentation](self)).
+pub const HIGHER_DEGREE_GRID: usize = 48;
+
 /// The normalised input range the constraints are imposed on.
 const INPUT_RANGE: (f64, f64) = (0.0, 1.0);
 
@@ -105,6 +123,41 @@ pub struct Parameters {
     pub weights: Vec<f64>,
     /// The constant `c` added to the model output (0 unless the offset is fitted).
     pub offset: f64,
+    /// The coefficients `c_5, c_7, ..., c_D` of a higher-degree odd input polynomial (empty
+    /// for the paper's cubic; see [`FitProblem::with_input_degree`]).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub higher: Vec<f64>,
+}
+
+impl Parameters {
+    /// The input polynomial's coefficients `[c_1, c_2, ..., c_D]` (`c_1 = a2`, `c_3 = a1`,
+    /// even powers 0), for `hystcomp_core::InputPolynomial::new`.
+    pub fn input_coefficients(&self) -> Vec<f64> {
+        let degree = 3 + 2 * self.higher.len();
+        let mut c = vec![0.0; degree];
+        c[0] = self.a2;
+        c[2] = self.a1;
+        for (q, value) in self.higher.iter().enumerate() {
+            c[4 + 2 * q] = *value;
+        }
+        c
+    }
+
+    /// The model these parameters describe (the cubic's own form when `higher` is empty).
+    pub fn model(
+        &self,
+        thresholds: &[f64],
+    ) -> Result<hystcomp_core::Mpim<f64, Vec<f64>>, hystcomp_core::CoreError> {
+        if self.higher.is_empty() {
+            hystcomp_core::Mpim::new(thresholds, &self.weights, self.a1, self.a2)
+        } else {
+            hystcomp_core::Mpim::with_input_polynomial(
+                thresholds,
+                &self.weights,
+                hystcomp_core::InputPolynomial::new(&self.input_coefficients())?,
+            )
+        }
+    }
 }
 
 /// What a constraint row stands for.
@@ -198,6 +251,8 @@ pub struct FitProblem {
     folded: bool,
     /// Extra regressor columns, whose parameters end `theta`.
     extra: usize,
+    /// The powers `5, 7, ..., D` of a higher-degree input polynomial (after `c` in `theta`).
+    higher: Vec<usize>,
     /// `b_1 = split * a1` when folded.
     split: f64,
     samples: usize,
@@ -244,9 +299,38 @@ impl FitProblem {
         margin: f64,
         extra: &[&[f64]],
     ) -> Result<Self, IdentifyError> {
+        Self::build(data, thresholds, direction, fit_offset, margin, extra, 3)
+    }
+
+    /// As [`FitProblem::new`], with the odd input polynomial of degree `degree` (3, 5, 7 or
+    /// 9; 3 is the paper's cubic): one parameter `c_j` per power `j = 5, 7, ..., degree`,
+    /// after `c` in `theta` (see the [module documentation](self)).
+    pub fn with_input_degree(
+        data: ProblemData<'_>,
+        thresholds: &[f64],
+        direction: Direction,
+        fit_offset: bool,
+        margin: f64,
+        degree: usize,
+    ) -> Result<Self, IdentifyError> {
+        Self::build(data, thresholds, direction, fit_offset, margin, &[], degree)
+    }
+
+    fn build(
+        data: ProblemData<'_>,
+        thresholds: &[f64],
+        direction: Direction,
+        fit_offset: bool,
+        margin: f64,
+        extra: &[&[f64]],
+        degree: usize,
+    ) -> Result<Self, IdentifyError> {
+        check_input_degree(degree)?;
         let ProblemData { input, output, fit } = data;
         let folded = thresholds.first() == Some(&0.0);
-        let own = parameter_count(thresholds, fit_offset);
+        let higher: Vec<usize> = (5..=degree).step_by(2).collect();
+        let base = parameter_count(thresholds, fit_offset);
+        let own = base + higher.len();
         let p = own + extra.len();
         if let Some(column) = extra.iter().find(|c| c.len() != input.len()) {
             return Err(IdentifyError::InvalidOption {
@@ -290,7 +374,12 @@ impl FitProblem {
             }
         }
         if fit_offset {
-            phi.column_mut(own - 1).fill(1.0);
+            phi.column_mut(base - 1).fill(1.0);
+        }
+        for (q, &power) in higher.iter().enumerate() {
+            for (i, &x) in span.iter().enumerate() {
+                phi[(i, base + q)] = x.powi(power as i32);
+            }
         }
         for (j, column) in extra.iter().enumerate() {
             phi.column_mut(own + j)
@@ -345,6 +434,7 @@ impl FitProblem {
             fit_offset,
             folded,
             extra: extra.len(),
+            higher,
             split,
             samples: rows,
             r_theta,
@@ -404,6 +494,7 @@ impl FitProblem {
         if self.fit_offset {
             names.push("c".to_owned());
         }
+        names.extend(self.higher.iter().map(|j| format!("c{j}")));
         names.extend((1..=self.extra).map(|j| format!("e{j}")));
         names
     }
@@ -432,6 +523,12 @@ impl FitProblem {
     /// Whether the output offset `c` is a parameter.
     pub fn fits_offset(&self) -> bool {
         self.fit_offset
+    }
+
+    /// The entry of `theta` holding the output offset `c`, when it is fitted.
+    pub fn offset_index(&self) -> Option<usize> {
+        self.fit_offset
+            .then(|| parameter_count(&self.thresholds, true) - 1)
     }
 
     /// The number of samples of the fitting span.
@@ -519,6 +616,7 @@ impl FitProblem {
             a2: full[1],
             weights: full[2..2 + n].to_vec(),
             offset: if self.fit_offset { full[2 + n] } else { 0.0 },
+            higher: full[2 + n + usize::from(self.fit_offset)..].to_vec(),
         }
     }
 
@@ -533,6 +631,9 @@ impl FitProblem {
         theta.extend(weights);
         if self.fit_offset {
             theta.push(parameters.offset);
+        }
+        for q in 0..self.higher.len() {
+            theta.push(parameters.higher.get(q).copied().unwrap_or(0.0));
         }
         theta.resize(theta.len() + self.extra, 0.0);
         theta
@@ -559,9 +660,11 @@ impl FitProblem {
             full.push(theta[1]);
             full.extend_from_slice(&theta[2..2 + n]);
         }
+        let base = parameter_count(&self.thresholds, self.fit_offset);
         if self.fit_offset {
-            full.push(theta[theta.len() - 1 - self.extra]);
+            full.push(theta[base - 1]);
         }
+        full.extend_from_slice(&theta[base..base + self.higher.len()]);
         full
     }
 
@@ -579,12 +682,49 @@ impl FitProblem {
         } else {
             row[2..2 + n].copy_from_slice(&full[2..2 + n]);
         }
+        let base = parameter_count(&self.thresholds, self.fit_offset);
+        let first = 2 + n + usize::from(self.fit_offset);
+        for q in 0..self.higher.len() {
+            row[base + q] = full[first + q];
+        }
         row
+    }
+
+    /// The number of entries of the full parameter vector `[a1, a2, b_1..b_n, (c), c_5..]`.
+    fn full_len(&self) -> usize {
+        self.thresholds.len() + 2 + usize::from(self.fit_offset) + self.higher.len()
+    }
+
+    /// Writes `h'(x) / sign` into a full row: `3 x^2` for `a1` and `j x^(j - 1)` for each
+    /// higher coefficient `c_j`, times `scale`.
+    fn remainder_slope_row(&self, full: &mut [f64], x: f64, scale: f64) {
+        full[0] = scale * 3.0 * x * x;
+        let first = 2 + self.thresholds.len() + usize::from(self.fit_offset);
+        for (q, &j) in self.higher.iter().enumerate() {
+            full[first + q] = scale * j as f64 * x.powi(j as i32 - 1);
+        }
+    }
+
+    /// The checkpoints `(k, x)` where the constraints are imposed: the cubic's exact ones, and
+    /// with a higher-degree polynomial [`HIGHER_DEGREE_GRID`] inner points of every interval.
+    fn checkpoints(&self) -> Vec<(usize, f64)> {
+        let (lo, hi) = INPUT_RANGE;
+        let mut points = Vec::new();
+        branch_checkpoints(&self.thresholds, lo, hi, |k, x| points.push((k, x)));
+        if !self.higher.is_empty() {
+            branch_intervals(&self.thresholds, lo, hi, |k, p, q| {
+                for i in 1..=HIGHER_DEGREE_GRID {
+                    let t = i as f64 / (HIGHER_DEGREE_GRID + 1) as f64;
+                    points.push((k, p + (q - p) * t));
+                }
+            });
+        }
+        points
     }
 
     fn build_constraints(&self) -> Vec<Constraint> {
         let n = self.thresholds.len();
-        let full_len = n + 2 + usize::from(self.fit_offset);
+        let full_len = self.full_len();
         let (lo, hi) = INPUT_RANGE;
         let mut rows: Vec<Constraint> = Vec::new();
         let push = |full: Vec<f64>, kind: ConstraintKind, rows: &mut Vec<Constraint>| {
@@ -600,11 +740,9 @@ impl FitProblem {
             }
         };
         // Branch slopes: a2 + 3 a1 x^2 + b_1 + ... + b_k.
-        let mut checkpoints = Vec::new();
-        branch_checkpoints(&self.thresholds, lo, hi, |k, x| checkpoints.push((k, x)));
-        for (k, x) in checkpoints {
+        for (k, x) in self.checkpoints() {
             let mut full = vec![0.0; full_len];
-            full[0] = 3.0 * x * x;
+            self.remainder_slope_row(&mut full, x, 1.0);
             full[1] = 1.0;
             full[2..2 + k].fill(1.0);
             push(
@@ -636,10 +774,16 @@ impl FitProblem {
             if lo < 0.0 && 0.0 < hi {
                 inputs.push(0.0);
             }
+            if !self.higher.is_empty() {
+                inputs.extend(
+                    (1..=HIGHER_DEGREE_GRID)
+                        .map(|i| lo + (hi - lo) * i as f64 / (HIGHER_DEGREE_GRID + 1) as f64),
+                );
+            }
             for x in inputs {
                 for sign in [1.0, -1.0] {
                     let mut full = vec![0.0; full_len];
-                    full[0] = -sign * 3.0 * x * x;
+                    self.remainder_slope_row(&mut full, x, -sign);
                     full[1] = 1.0;
                     full[2..2 + always].fill(-sign);
                     push(
@@ -651,13 +795,11 @@ impl FitProblem {
             }
         }
         if let (Direction::Plant, Some(rho)) = (self.direction, self.delayed_loop_bound) {
-            let mut checkpoints = Vec::new();
-            branch_checkpoints(&self.thresholds, lo, hi, |k, x| checkpoints.push((k, x)));
-            for (k, x) in checkpoints {
+            for (k, x) in self.checkpoints() {
                 for sign in [1.0, -1.0] {
                     // Delayed WIHC: rho a2 - sign (3 a1 x^2 + S_k).
                     let mut full = vec![0.0; full_len];
-                    full[0] = -sign * 3.0 * x * x;
+                    self.remainder_slope_row(&mut full, x, -sign);
                     full[1] = rho;
                     full[2..2 + k].fill(-sign);
                     push(
@@ -672,7 +814,7 @@ impl FitProblem {
                     );
                     // Delayed IHC: rho (a2 + S_k) - sign 3 a1 x^2.
                     let mut full = vec![0.0; full_len];
-                    full[0] = -sign * 3.0 * x * x;
+                    self.remainder_slope_row(&mut full, x, -sign);
                     full[1] = rho;
                     full[2..2 + k].fill(rho);
                     push(
@@ -699,6 +841,22 @@ impl FitProblem {
         }
         rows
     }
+}
+
+/// Refuses an input polynomial degree identification cannot fit: odd, 3 to
+/// [`MAX_FIT_INPUT_DEGREE`].
+pub(crate) fn check_input_degree(degree: usize) -> Result<(), IdentifyError> {
+    if degree % 2 == 1 && (3..=MAX_FIT_INPUT_DEGREE).contains(&degree) {
+        return Ok(());
+    }
+    Err(IdentifyError::InvalidOption {
+        option: "input degree",
+        value: degree.to_string(),
+        reason: format!(
+            "the input polynomial g(x) = a2 x + a1 x^3 + c5 x^5 + ... is odd, of degree 3 (the \
+             paper's cubic), 5, 7 or 9 (at most {MAX_FIT_INPUT_DEGREE})"
+        ),
+    })
 }
 
 /// The smallest and largest `x^2` for `x` in `[lo, hi]`.

@@ -300,7 +300,7 @@ impl ParticleSwarm {
             .map(|j| match j {
                 0 => b.cubic,
                 1 => b.linear,
-                j if problem.fits_offset() && j == p - 1 => b.offset,
+                j if problem.offset_index() == Some(j) => b.offset,
                 _ => b.weights,
             })
             .collect()

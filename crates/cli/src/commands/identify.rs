@@ -96,6 +96,13 @@ pub struct FitArgs {
         conflicts_with = "operators"
     )]
     pub thresholds: Option<Vec<f64>>,
+    /// Degree of the odd input polynomial g(x) = a2 x + a1 x^3 + c5 x^5 + ... (eq. (3)): 3
+    /// (the paper's cubic), 5, 7 or 9. The fit keeps every branch slope g'(x) + b_1 + ... +
+    /// b_k >= --margin over the fitted input range, so the model stays invertible. Least
+    /// squares only (the particle swarm fits the cubic); not with --creep-elements or
+    /// --vibration (the chain fits the cubic).
+    #[arg(long, default_value_t = 3, value_name = "D")]
+    pub input_degree: usize,
     /// Where the play operators' memory at the start comes from, and so which samples are
     /// fitted. auto: up to the first sample where the voltage reaches the record's minimum or
     /// maximum, where the memory becomes known whatever came before (wiping-out). estimate:
@@ -454,6 +461,22 @@ impl FitArgs {
                 "thresholds",
             )?;
         }
+        if !(self.input_degree % 2 == 1
+            && (3..=hystcomp_identify::MAX_FIT_INPUT_DEGREE).contains(&self.input_degree))
+        {
+            return Err(CliError::input(format!(
+                "--input-degree {} is not usable: the input polynomial a2 x + a1 x^3 + c5 x^5 + \
+                 ... is odd, of degree 3 (the paper's cubic), 5, 7 or 9",
+                self.input_degree
+            )));
+        }
+        if self.input_degree != 3 && self.method == "pso" {
+            return Err(CliError::input(format!(
+                "--input-degree {} needs --method ls: the particle swarm fits the paper's cubic \
+                 only",
+                self.input_degree
+            )));
+        }
         bounds::count(
             "--pso-particles",
             self.particles,
@@ -546,6 +569,7 @@ impl FitArgs {
                 Some(hystcomp_identify::DEFAULT_MAX_FIT_RMS_PERCENT)
             },
             delayed_loop_bound: self.for_delayed.then_some(self.delayed_loop_bound),
+            input_degree: self.input_degree,
             voltage_unit: columns.voltage_unit.clone(),
             displacement_unit: columns.displacement_unit.clone(),
         };
@@ -831,6 +855,13 @@ pub fn run(args: &Args, ctx: Context) -> Result<(), CliError> {
     let loaded = c.load(&args.data)?;
     let options = args.fit.options(c, args.direction, args.holdout, &loaded)?;
     if let Some(chain) = args.chain.options(c, &loaded)? {
+        if options.input_degree != 3 {
+            return Err(CliError::input(format!(
+                "--input-degree {} is not available with the creep or vibration chain, which \
+                 fits the paper's cubic; leave it out, or identify the hysteresis alone",
+                options.input_degree
+            )));
+        }
         return run_chain(args, ctx, &loaded, &options, &chain);
     }
     let mut bar = if args.fit.iterates() {

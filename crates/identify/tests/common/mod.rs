@@ -54,6 +54,7 @@ pub fn feasible(model: &VecMpim, x: &[f64], direction: Direction) -> bool {
         a2: model.a2(),
         weights: model.weights().to_vec(),
         offset: 0.0,
+        higher: Vec::new(),
     });
     p.smallest_slack(&theta) > 0.0
 }
