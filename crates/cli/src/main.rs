@@ -50,7 +50,7 @@ enum Command {
     /// Per-sample cost of the forward model and every compensator.
     Bench(commands::bench::Args),
     /// Identify a model from measured (voltage, displacement) samples.
-    Identify(commands::identify::Args),
+    Identify(Box<commands::identify::Args>),
     /// Identify on one record, predict and replay the compensators on another.
     Crossval(Box<commands::crossval::Args>),
     /// Write a test signal as CSV: the study's excitation, the paper's trajectory, rasters,
@@ -127,7 +127,7 @@ fn main() -> ExitCode {
     let result = match &cli.command {
         Command::Compensate(args) => run(args, ctx, commands::compensate::run),
         Command::Bench(args) => run(args, ctx, commands::bench::run),
-        Command::Identify(args) => run(args, ctx, commands::identify::run),
+        Command::Identify(args) => run(&**args, ctx, commands::identify::run),
         Command::Crossval(args) => run(&**args, ctx, commands::crossval::run),
         Command::Signal(args) => run(args, ctx, commands::signal::run),
         Command::Predict(args) => run(args, ctx, commands::predict::run),

@@ -684,9 +684,8 @@ impl FitProblem {
         }
         let base = parameter_count(&self.thresholds, self.fit_offset);
         let first = 2 + n + usize::from(self.fit_offset);
-        for q in 0..self.higher.len() {
-            row[base + q] = full[first + q];
-        }
+        let count = self.higher.len();
+        row[base..base + count].copy_from_slice(&full[first..first + count]);
         row
     }
 
