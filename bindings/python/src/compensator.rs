@@ -235,7 +235,7 @@ impl Compensator {
     }
 
     /// For the IHC and WIHC methods: the under-relaxation of the family's guarded delayed
-    /// loop, in ``(0, 1]`` (1: the guarded loop is the plain one). ``None`` for DIHC.
+    /// loop, in ``(0, 1]`` (1: no under-relaxation). ``None`` for DIHC.
     #[getter]
     fn guard_relaxation(&self) -> Option<f64> {
         self.lock().guard_relaxation()

@@ -73,12 +73,15 @@ pub enum SolveMode {
     /// ([`crate::CoreError::DelayedLoopUnstable`]): below 1 the loop settles after any jump in
     /// `y_d`.
     Delayed,
-    /// The delayed loop with a guard that makes it unable to oscillate, whatever the model: an
-    /// under-relaxed update (see [`crate::Ihc`] and [`crate::Wihc`] for the law and the proof
-    /// sketch). While `y_d` holds, the model's output approaches it from one side, never
-    /// passing it, so the drive moves monotonically and never rings. On models whose delayed
-    /// loop already approaches monotonically (the paper's Table 1 for IHC) it is the plain
-    /// delayed loop; otherwise it lags a little more.
+    /// The delayed loop with a guard that makes it unable to oscillate, whatever the model: only
+    /// the input polynomial's remainder is delayed, under-relaxed where needed, and the
+    /// operators are solved exactly (see [`crate::Ihc`] and [`crate::Wihc`] for the law and the
+    /// proof sketch). While a reachable `y_d` holds, the model's output approaches it from one
+    /// side, never passing it, so the drive moves monotonically and never rings; an unreachable
+    /// `y_d` gives the exact solution's limit at once, counted in [`Diagnostics::saturated`]. On
+    /// models whose delayed IHC loop already approaches monotonically (the paper's Table 1) the
+    /// guarded IHC is the plain delayed IHC on reachable positions; otherwise it lags a little
+    /// more. The guarded WIHC follows the same law on the plant's own operators.
     DelayedGuarded,
     /// The plain delayed loop without the loop-gain check: the explicit override for a model
     /// whose delayed loop can oscillate (gain of 1 or more). The outputs still never leave the
@@ -107,8 +110,9 @@ pub struct Diagnostics {
     pub saturated: u64,
     /// Samples where the output was clamped to a limit although the desired position was
     /// reachable within the limits from the plant model's current state: only the delayed
-    /// loops ([`SolveMode::Delayed`], [`SolveMode::DelayedAllowUnstable`]) do this, when they lag or ring after a jump in `y_d`
-    /// (see [`crate::Wihc`]). The exact solves never do.
+    /// loops ([`SolveMode::Delayed`], [`SolveMode::DelayedAllowUnstable`]) do this, when they
+    /// lag or ring after a jump in `y_d` (see [`crate::Wihc`]). The exact solves never do, nor
+    /// do the guarded loops beyond rounding.
     pub loop_saturated: u64,
     /// Samples whose desired position was NaN or infinite: the previous output was held.
     pub non_finite: u64,

@@ -4,7 +4,7 @@ use crate::buffer::copied;
 use crate::compensator::OutputGuard;
 use crate::invertibility::DelayedLoop;
 use crate::solve::{OddCubic, Remainder, increasing_root};
-use crate::walk::{PlayBank, SegmentEquation, rounding_tolerance};
+use crate::walk::{PlayBank, ReachOnly, SegmentEquation, rounding_tolerance};
 use crate::{
     Buffer, Compensator, CoreError, Diagnostics, InputPolynomial, LoopGain, Mpim, OutputLimits,
     Real, SolveMode,
@@ -28,7 +28,12 @@ use crate::{
 /// - [`SolveMode::DelayedAllowUnstable`]: the same loop without that check (the explicit
 ///   override).
 /// - [`SolveMode::DelayedGuarded`]: an under-relaxed delayed loop that cannot oscillate,
-///   whatever the model:
+///   whatever the model. Each sample first walks the inverse's segments with the exact
+///   residual of eq. (5), without solving on the last one (the walk alone, no root), to learn
+///   whether `y_d` is reachable within the limits from the current state. When it is not, the
+///   exact solution is the limit in the direction of travel: the guarded loop emits it at once
+///   (bit for bit the exact IHC's output) and counts the sample in
+///   [`Diagnostics::saturated`]. When it is, the loop takes the under-relaxed step
 ///
 ///   `w(t) = w(t - Ts) + mu e(t)`, `e(t) = y_d(t) - w(t - Ts) - h(v(t - Ts))`,
 ///   `mu = min(1, 1 / (1 + q_max))`,
@@ -36,25 +41,28 @@ use crate::{
 ///   where `w(t - Ts) + h(v(t - Ts))` is the plant model's output for the previous drive
 ///   (`P1[P1^{-1}[w]] = w`, ERRATA item 3), so `e` is the model's tracking error, and `q_max`
 ///   is the largest signed gain `(g'(x) - a2) / (a2 + b_1 + ... + b_k)` over the reachable
-///   branches. With `mu = 1` this is the plain delayed loop.
+///   branches. With `mu = 1` a reachable sample is the plain delayed loop's, bit for bit.
 ///
 ///   *Proof sketch.* While `y_d` holds, moving `w` from `w(t - Ts)` to `w(t)` moves `v` along
 ///   `P1^{-1}` and the model's output by `integral (1 + q(k, v)) dw` over the move, where each
 ///   `(k, v)` met is a reachable branch and `1 + q = (g'(v) + b_1 + ... + b_k) /
 ///   (a2 + b_1 + ... + b_k)` is the model's slope over the PI part's, positive for an
 ///   invertible model. So `e(t + Ts) = e(t) (1 - mu (1 + q_avg))` with `1 + q_avg` in
-///   `[1 + q_min, 1 + q_max]`: the factor lies in `[0, 1 - mu (1 + q_min)]`, below 1. The error
-///   keeps its sign and shrinks; an output limit only shortens the move, which keeps the
-///   factor in `[0, 1)`. The model's output therefore approaches `y_d` from one side, the
-///   drive moves monotonically towards the exact solution and never alternates between
-///   limits. When `y_d` moves, the error is the tracking lag, again without overshoot from the
-///   loop. The price: when `q_max > 0` it lags a little more than the plain delayed loop.
+///   `[1 + q_min, 1 + q_max]`: the factor lies in `[0, 1 - mu (1 + q_min)]`, below 1. The error keeps its sign and shrinks, and since
+///   the exact solution lies within the limits the step never reaches a limit: the model's
+///   output approaches `y_d` from one side and the drive moves monotonically towards the exact
+///   solution. An unreachable `y_d` sends the drive to the limit the exact solution sits on,
+///   where it stays while `y_d` holds (feeding the limit again changes no memory). Either
+///   way the drive never alternates between limits. When `y_d` moves, the error is the
+///   tracking lag, again without overshoot from the loop. The price: when `q_max > 0` it lags
+///   a little more than the plain delayed loop.
 ///
-/// Cost: a sample where the delayed solve hits an output limit also runs the exact solve of
-/// eq. (5) from the same state, only to classify the clamp (reachable:
+/// Cost: a sample of the plain delayed loop that hits an output limit also runs the exact
+/// solve of eq. (5) from the same state, only to classify the clamp (reachable:
 /// [`Diagnostics::loop_saturated`]; not: [`Diagnostics::saturated`]), so it costs about one
-/// exact step more. The worst case per sample is the delayed step plus the exact step;
-/// real-time budgets should use that bound.
+/// exact step more; real-time budgets should use the delayed step plus the exact step. The
+/// guarded loop walks twice every sample (the reachability walk, then the relaxed step's),
+/// never solving a root of the cubic: its worst case is two walks over the operators.
 ///
 /// See [`Compensator`] for the output guarantees.
 #[derive(Debug, Clone)]
@@ -260,13 +268,28 @@ fn ihc_step<T: Real, B: Buffer<T>, R: Remainder<T>>(
         let v = inverse.feed_solved(&solution);
         return guard.emit(v, solution.saturated);
     }
-    // Eq. (5) with the loop broken: w(t) = y_d(t) - h(v(t - Ts)); guarded, the under-relaxed
-    // w(t - Ts) + mu (y_d(t) - w(t - Ts) - h(v(t - Ts))).
-    let w = if mode == SolveMode::DelayedGuarded && relaxation < T::one() {
-        w_prev - relaxation * f_exact
-    } else {
-        desired - h_prev
-    };
+    if mode == SolveMode::DelayedGuarded {
+        // Beyond reach from this state: the exact solution is the limit in the direction of
+        // travel; emitted at once and counted, as the exact IHC does.
+        let reach = inverse.solve(&ReachOnly(&exact), f_exact, guard.limits);
+        if reach.saturated {
+            let v = inverse.feed_solved(&reach);
+            return guard.emit(v, true);
+        }
+        // The under-relaxed w(t - Ts) + mu (y_d(t) - w(t - Ts) - h(v(t - Ts))); with mu = 1
+        // the plain delayed loop's w.
+        let w = if relaxation < T::one() {
+            w_prev - relaxation * f_exact
+        } else {
+            desired - h_prev
+        };
+        let solution = inverse.solve(&Eq5Delayed { w }, w_prev - w, guard.limits);
+        let v = inverse.feed_solved(&solution);
+        // y_d is reachable: a clamp here (rounding only, by the proof) is the loop's.
+        return guard.emit_classified(v, solution.saturated, || true);
+    }
+    // Eq. (5) with the loop broken: w(t) = y_d(t) - h(v(t - Ts)).
+    let w = desired - h_prev;
     let solution = inverse.solve(&Eq5Delayed { w }, w_prev - w, guard.limits);
     // A clamped sample: was y_d reachable within the limits? The exact solve from the same
     // state says; it only runs when the delayed loop hit a limit.

@@ -46,6 +46,36 @@ pub(crate) trait SegmentEquation<T: Real> {
     fn root(&self, lo: T, hi: T, f_lo: T, f_hi: T, alpha: T, beta: T, inverse_alpha: T) -> T;
 }
 
+/// An equation walked only to learn whether its root lies within the limits: the same
+/// residual, control and rounding, and no root solve (the walk's segment start stands for it).
+/// [`PlayBank::solve`] with it reports `saturated` exactly when the solve of the wrapped
+/// equation would, for the cost of the walk alone.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct ReachOnly<'a, E>(pub &'a E);
+
+impl<T: Real, E: SegmentEquation<T>> SegmentEquation<T> for ReachOnly<'_, E> {
+    #[inline(always)]
+    fn residual(&self, x: T, alpha: T, beta: T) -> T {
+        self.0.residual(x, alpha, beta)
+    }
+    #[inline(always)]
+    fn control(&self, x: T, alpha: T, beta: T) -> T {
+        self.0.control(x, alpha, beta)
+    }
+    #[inline(always)]
+    fn input_at_control(&self, v: T, alpha: T, beta: T) -> T {
+        self.0.input_at_control(v, alpha, beta)
+    }
+    #[inline(always)]
+    fn rounding(&self, x: T, alpha: T, beta: T) -> T {
+        self.0.rounding(x, alpha, beta)
+    }
+    #[inline(always)]
+    fn root(&self, lo: T, _hi: T, _f_lo: T, _f_hi: T, _alpha: T, _beta: T, _inv: T) -> T {
+        lo
+    }
+}
+
 /// The rounding allowance of a residual that sums terms of total magnitude `terms`:
 /// `256 eps (1 + terms)`, absolute as well as relative, because the desired position itself
 /// carries the rounding of the plant model that produced it (sums of `b_i w_i`, eqs. (2), (5)

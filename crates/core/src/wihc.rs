@@ -3,7 +3,7 @@
 use crate::compensator::OutputGuard;
 use crate::invertibility::{DelayedLoop, delayed_gain_range};
 use crate::solve::{OddCubic, Remainder, increasing_root};
-use crate::walk::{PlayBank, SegmentEquation, rounding_tolerance};
+use crate::walk::{PlayBank, ReachOnly, SegmentEquation, rounding_tolerance};
 use crate::{
     Buffer, Compensator, CoreError, Diagnostics, InputPolynomial, LoopGain, Mpim, OutputLimits,
     Real, SolveMode,
@@ -41,34 +41,49 @@ use crate::{
 ///   the trajectory sweeps past the ringing's range. The clamped samples count in
 ///   [`Diagnostics::loop_saturated`], not in [`Diagnostics::saturated`]: the desired position
 ///   was reachable.
-/// - [`SolveMode::DelayedGuarded`]: an under-relaxed delayed loop that cannot oscillate,
-///   whatever the model:
+/// - [`SolveMode::DelayedGuarded`]: a delayed loop that cannot oscillate, whatever the model.
+///   It delays only the input polynomial's remainder `h` and keeps the operators' part of
+///   `H[v](t)` implicit, solved exactly by the walk over the plant's own segments (no inverse
+///   model): eq. (9) as `a2 v(t) + sum b_i F_{r_i}[v](t) = z(t)`, with
 ///
-///   `v(t) = v(t - Ts) + lambda e(t) / a2`, `e(t) = y_d(t) - P_{t - Ts}[v(t - Ts)]`,
-///   `lambda = min(1, 1 / (1 + q_max))`,
+///   `z(t) = P1_{t - Ts} + mu e(t)`, `e(t) = y_d(t) - h(v(t - Ts)) - P1_{t - Ts}`,
+///   `mu = min(1, 1 / (1 + q_max))`,
 ///
-///   where `P_{t - Ts}[v(t - Ts)] = a2 v(t - Ts) + H[v](t - Ts)` is the model's output for the
-///   previous drive (with `lambda = 1`, the plain delayed loop) and `q_max` the largest signed
-///   gain `(g'(x) - a2 + b_1 + ... + b_k) / a2` over the reachable branches.
+///   where `P1_{t - Ts} = a2 v(t - Ts) + sum b_i F_{r_i}[v](t - Ts)`, so that `e` is the
+///   model's tracking error for the previous drive, and `q_max` the largest signed gain
+///   `(g'(x) - a2) / (a2 + b_1 + ... + b_k)` over the reachable branches: the guarded IHC's law
+///   ([`crate::Ihc`]), walked on the plant's PI part instead of eq. (7)'s inverse (the same
+///   drive up to rounding). Before it, each sample walks the segments with the exact residual
+///   of eq. (9), without a root solve, to learn whether `y_d` is reachable within the limits:
+///   when it is not, the exact solution is the limit in the direction of travel, emitted at
+///   once (bit for bit the exact WIHC's output) and counted in [`Diagnostics::saturated`].
 ///
-///   *Proof sketch.* While `y_d` holds, moving the drive from `v(t - Ts)` to `v(t)` moves the
-///   model's output by `integral (g'(x) + b_1 + ... + b_k) dx` over the move, each `(k, x)`
-///   met a reachable branch, whose slope is `a2 (1 + q)` with `1 + q` in
-///   `[1 + q_min, 1 + q_max]` and `1 + q_min > 0` for an invertible model. So
-///   `e(t + Ts) = e(t) (1 - lambda (1 + q_avg))`, a factor in `[0, 1 - lambda (1 + q_min)]`,
-///   below 1: the error keeps its sign and shrinks, and an output limit only shortens the
-///   move. The model's output approaches `y_d` from one side and the drive moves
-///   monotonically: it never alternates between limits, and it never clamps while `y_d` is
-///   reachable. The price: it lags more than the plain loop when `q_max > 0` (Table 1: `lambda`
-///   = 0.38).
+///   *Proof sketch.* While `y_d` holds, moving `P1` from `P1_{t - Ts}` to `z(t)` along the
+///   walk moves the drive monotonically and the model's output `h(v) + P1` by
+///   `integral (1 + q(k, v)) dP1` over the move, each `(k, v)` met a reachable branch, with
+///   `1 + q = (g'(v) + b_1 + ... + b_k) / (a2 + b_1 + ... + b_k)` in `[1 + q_min, 1 + q_max]`,
+///   positive for an invertible model (which also makes `a2 + b_1 + ... + b_k > 0`: every
+///   branch passes through the reset input 0, where `g'(0) = a2`). So
+///   `e(t + Ts) = e(t) (1 - mu (1 + q_avg))`, a factor in `[0, 1 - mu (1 + q_min)]`, below 1:
+///   the error keeps its sign and shrinks. When `y_d` is reachable the exact solution lies
+///   within the limits and the step, never passing it, never reaches a limit; an unreachable
+///   `y_d` sends the drive to the limit the exact solution sits on, where it stays while `y_d`
+///   holds. The model's output approaches `y_d` from one side, the drive never alternates
+///   between limits, and never clamps while `y_d` is reachable. Unlike the plain delayed loop,
+///   whose gain `|g'(x) - a2 + b_1 + ... + b_k| / a2` grows with the operators' weights (3 to
+///   37 on the DBO record's least-squares models), its gain only involves the input
+///   polynomial's curvature against the PI part's slope (Table 1: `q` in `[-0.68, 0]`,
+///   `mu = 1`): it lags the exact WIHC by about what the delayed IHC does.
 ///
 /// Prefer [`SolveMode::Exact`] where the budget allows.
 ///
-/// Cost: a clamped delayed sample also runs one exact solve of eq. (9) from the same state,
-/// only to classify the clamp (reachable: [`Diagnostics::loop_saturated`]; not:
-/// [`Diagnostics::saturated`]), so it costs about one exact step more. The worst case per
-/// sample is the delayed step plus the exact step; real-time budgets should use that bound
-/// (the unchecked loop can clamp on many consecutive samples while it rings).
+/// Cost: a clamped sample of the plain delayed loop also runs one exact solve of eq. (9) from
+/// the same state, only to classify the clamp (reachable: [`Diagnostics::loop_saturated`];
+/// not: [`Diagnostics::saturated`]), so it costs about one exact step more. The worst case
+/// per sample is the delayed step plus the exact step; real-time budgets should use that bound
+/// (the unchecked loop can clamp on many consecutive samples while it rings). The guarded loop
+/// walks twice every sample (reachability, then the step) and never solves a root of the
+/// cubic: its worst case is two walks over the operators and one memory update.
 ///
 /// See [`Compensator`] for the output guarantees.
 #[derive(Debug, Clone)]
@@ -80,7 +95,7 @@ pub struct Wihc<T: Real, B: Buffer<T>> {
     /// `1 / a2`.
     pub(crate) inverse_a2: T,
     pub(crate) mode: SolveMode,
-    /// `lambda` of [`SolveMode::DelayedGuarded`], whatever the mode.
+    /// `mu` of [`SolveMode::DelayedGuarded`], whatever the mode.
     pub(crate) relaxation: T,
     pub(crate) guard: OutputGuard<T>,
 }
@@ -101,6 +116,9 @@ impl<T: Real, B: Buffer<T>> Wihc<T, B> {
         }
         plant.check_invertible(limits.min(), limits.max())?;
         let gains = plant.delayed_gain_range(DelayedLoop::Wihc, limits.min(), limits.max());
+        // The guarded loop delays only the remainder of the input polynomial, as the delayed
+        // IHC does: its relaxation is the IHC loop's.
+        let guarded = plant.delayed_gain_range(DelayedLoop::Ihc, limits.min(), limits.max());
         // NaN counts as unstable.
         if mode == SolveMode::Delayed && (gains.worst.gain >= T::one() || gains.worst.gain.is_nan())
         {
@@ -116,7 +134,7 @@ impl<T: Real, B: Buffer<T>> Wihc<T, B> {
             input: *plant.input_polynomial(),
             inverse_a2: T::one() / a2,
             mode,
-            relaxation: gains.relaxation(),
+            relaxation: guarded.relaxation(),
             guard: OutputGuard::new(limits),
         };
         wihc.reset();
@@ -149,8 +167,9 @@ impl<T: Real, B: Buffer<T>> Wihc<T, B> {
         .worst
     }
 
-    /// The under-relaxation `lambda` of [`SolveMode::DelayedGuarded`] on this model and limits,
-    /// in `(0, 1]` (1: the guarded loop is the plain delayed one). Reported whatever the mode.
+    /// The under-relaxation `mu` of [`SolveMode::DelayedGuarded`] on this model and limits, in
+    /// `(0, 1]` (1: no under-relaxation): the guarded IHC's, [`crate::Ihc::guard_relaxation`].
+    /// Reported whatever the mode.
     pub fn guard_relaxation(&self) -> T {
         self.relaxation
     }
@@ -198,6 +217,31 @@ impl<T: Real, R: Remainder<T>> SegmentEquation<T> for Eq9<T, R> {
             f_lo,
             f_hi,
         )
+    }
+}
+
+/// The guarded loop's step on one segment: the plant's PI part `alpha v + beta` (the bank's
+/// output) brought to `target`, in the voltage itself.
+struct BankOutput<T> {
+    target: T,
+}
+
+impl<T: Real> SegmentEquation<T> for BankOutput<T> {
+    #[inline(always)]
+    fn residual(&self, x: T, alpha: T, beta: T) -> T {
+        alpha * x + beta - self.target
+    }
+    #[inline(always)]
+    fn control(&self, x: T, _alpha: T, _beta: T) -> T {
+        x
+    }
+    #[inline(always)]
+    fn input_at_control(&self, v: T, _alpha: T, _beta: T) -> T {
+        v
+    }
+    #[inline(always)]
+    fn root(&self, lo: T, hi: T, _f_lo: T, _f_hi: T, _alpha: T, beta: T, inv_alpha: T) -> T {
+        ((self.target - beta) * inv_alpha).max(lo).min(hi)
     }
 }
 
@@ -283,14 +327,39 @@ fn wihc_step<T: Real, B: Buffer<T>, R: Remainder<T>>(
         }
         return v;
     }
+    if mode == SolveMode::DelayedGuarded {
+        let equation = Eq9 { remainder, desired };
+        let h_prev = remainder.value(v_prev);
+        let p1_prev = bank.output();
+        // The model's output for the previous drive minus y_d: -e(t).
+        let f_prev = h_prev + p1_prev - desired;
+        // Beyond reach from this state: the exact solution is the limit in the direction of
+        // travel; emitted at once and counted, as the exact WIHC does.
+        let reach = bank.solve(&ReachOnly(&equation), f_prev, guard.limits);
+        let s = if reach.saturated {
+            reach
+        } else {
+            // P1 = z(t) = P1(t - Ts) + mu e(t); with mu = 1, y_d - h(v(t - Ts)).
+            let target = if relaxation < T::one() {
+                p1_prev - relaxation * f_prev
+            } else {
+                desired - h_prev
+            };
+            bank.solve(&BankOutput { target }, p1_prev - target, guard.limits)
+        };
+        // A clamp of a reachable y_d (rounding only, by the proof) is the loop's.
+        let reachable = !reach.saturated;
+        let v = guard.emit_classified(s.input, s.saturated, || reachable);
+        if v == s.input {
+            bank.feed_solved(&s);
+        } else {
+            bank.feed(v);
+        }
+        return v;
+    }
     // H[v](t - Ts) = h(v(t - Ts)) + sum b_i F_{r_i}[v](t - Ts).
     let h_prev = remainder.value(v_prev) + bank.memory_sum();
-    let next = if mode == SolveMode::DelayedGuarded && relaxation < T::one() {
-        // v(t - Ts) + lambda (y_d(t) - a2 v(t - Ts) - H[v](t - Ts)) / a2.
-        v_prev + relaxation * (desired - h_prev - bank.a() * v_prev) * inverse_a2
-    } else {
-        (desired - h_prev) * inverse_a2
-    };
+    let next = (desired - h_prev) * inverse_a2;
     // A clamped sample counts as a loop saturation when the exact eq. (9) could have been met
     // within the limits from the same state (solved only then).
     let limits = guard.limits;

@@ -242,3 +242,35 @@ fn an_f32_ihc_with_a_small_a2_beside_its_zero_threshold_weight_stays_exact() {
         panic!("{violation}");
     }
 }
+
+/// Found by `plant_compensators_keep_their_invariants` at `PROPTEST_CASES=20000` (its minimal
+/// case: seed 8648237401598759739, n = 1): a guarded delayed IHC with a relaxation below 1
+/// (`a1 > 0`) fed a desired position twice beyond anything reachable (4.18 against a reach of
+/// 2.04) took its under-relaxed step to v = 0.653, short of the limit, and the sample was not
+/// counted. The guarded loops now learn first whether `y_d` is reachable from the current state
+/// (the exact solve's walk, without its root) and, when it is not, emit the limit the exact
+/// solution sits on and count the sample as saturated.
+#[test]
+fn a_guarded_ihc_counts_an_unreachable_position_on_its_first_step() {
+    let mut rng = rng(8_648_237_401_598_759_739);
+    let plant = random_invertible_model(&mut rng, 1);
+    let limits = limits_from(&mut rng);
+    let desired = desired(&mut rng, &plant, 400);
+    let subject = Subject {
+        model: plant.clone(),
+        limits,
+        moderate: true,
+    };
+    if let Err(violation) = check_plant_compensators(&subject, &desired) {
+        panic!("{violation}");
+    }
+    let subject32 = Subject {
+        model: as_f32(&plant),
+        limits: limits_f32(limits),
+        moderate: true,
+    };
+    let desired32: Vec<f32> = desired.iter().map(|&y| y as f32).collect();
+    if let Err(violation) = check_plant_compensators(&subject32, &desired32) {
+        panic!("f32: {violation}");
+    }
+}

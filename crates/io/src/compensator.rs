@@ -33,7 +33,9 @@ pub enum Method {
     /// The delayed IHC with its guard: an under-relaxed update that cannot oscillate on any
     /// model ([`hystcomp_core::SolveMode::DelayedGuarded`]).
     IhcGuarded,
-    /// The delayed WIHC with its guard ([`hystcomp_core::SolveMode::DelayedGuarded`]).
+    /// The delayed WIHC with its guard: only the input polynomial's remainder delayed and
+    /// under-relaxed, the operators solved exactly; it cannot oscillate on any model
+    /// ([`hystcomp_core::SolveMode::DelayedGuarded`]).
     WihcGuarded,
 }
 
@@ -457,7 +459,7 @@ impl ScaledCompensator {
     }
 
     /// For the IHC and WIHC methods: the under-relaxation of the family's guarded delayed loop
-    /// on this model and limits, in `(0, 1]` (1: the guarded loop is the plain one). `None`
+    /// on this model and limits, in `(0, 1]` (1: no under-relaxation). `None`
     /// for DIHC.
     pub fn guard_relaxation(&self) -> Option<f64> {
         self.guard_relaxation

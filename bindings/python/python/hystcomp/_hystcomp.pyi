@@ -273,7 +273,7 @@ class Compensator:
     @property
     def guard_relaxation(self) -> Optional[float]:
         """For the IHC and WIHC methods: the under-relaxation of the family's guarded delayed
-        loop, in ``(0, 1]`` (1: the guarded loop is the plain one). ``None`` for DIHC."""
+        loop, in ``(0, 1]`` (1: no under-relaxation). ``None`` for DIHC."""
 
 class CompensatorBank:
     """Many feedforward hysteresis compensators of one method, one channel per model, stepped

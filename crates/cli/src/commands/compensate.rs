@@ -137,7 +137,7 @@ struct Report {
     /// without --allow-unstable-delay).
     delayed_loop_gain: Option<f64>,
     /// IHC and WIHC methods: the under-relaxation of the family's guarded delayed loop, in
-    /// (0, 1] (1: the guarded loop is the plain one).
+    /// (0, 1] (1: no under-relaxation).
     guard_relaxation: Option<f64>,
     /// Whether --allow-unstable-delay was given.
     allow_unstable_delay: bool,

@@ -5,7 +5,7 @@ use super::lanes::{Lanes, Mask};
 use super::plant::{
     PlantKernel, all_odd_cubic, cubic_lanes, plant_bank, polynomial_lanes, write_lane,
 };
-use super::play::{LaneEquation, PlayState, feed, feed_solved, solve};
+use super::play::{LaneEquation, PlayState, ReachOnly, feed, feed_solved, solve};
 use super::root::{LaneRemainder, increasing_root};
 use super::run::{BlockKernel, run};
 use super::storage::{BankStorage, Block, Blocks, PlantRows};
@@ -253,15 +253,41 @@ impl PlantKernel<IhcMethod> {
             );
             let v = feed_solved(block, rows, &mut state, &solution, active, self.uniform);
             guard.emit(v, solution.saturated, active)
-        } else {
-            // w(t) = y_d(t) - h(v(t - Ts)); guarded, w(t - Ts) + mu (y_d - w(t - Ts) - h(v(t - Ts))).
+        } else if self.mode == SolveMode::DelayedGuarded {
+            // Beyond reach: the exact solution's limit at once, counted (`crate::ihc::ihc_step`).
+            let reach = solve(
+                block,
+                rows,
+                &state,
+                &ReachOnly(&exact),
+                f_exact,
+                guard.min,
+                guard.max,
+                active,
+            );
+            let beyond = reach.saturated & active;
+            // w(t - Ts) + mu (y_d - w(t - Ts) - h(v(t - Ts))); with mu = 1, y_d - h(v(t - Ts)).
             let relaxation = block.get(rows.scalar(PlantRows::RELAXATION));
-            let guarded = if self.mode == SolveMode::DelayedGuarded {
-                relaxation.lt(Lanes::splat(T::one()))
-            } else {
-                Mask::splat(false)
-            };
-            let w = (w_prev - relaxation * f_exact).or_keep(guarded, desired - h_prev);
+            let relaxed = relaxation.lt(Lanes::splat(T::one()));
+            let w = (w_prev - relaxation * f_exact).or_keep(relaxed, desired - h_prev);
+            let stepping = active.and_not(beyond);
+            let step = solve(
+                block,
+                rows,
+                &state,
+                &Eq5Delayed { w },
+                w_prev - w,
+                guard.min,
+                guard.max,
+                stepping,
+            );
+            let solution = reach.select(beyond, step);
+            let v = feed_solved(block, rows, &mut state, &solution, active, self.uniform);
+            let (out, clamped) = guard.clamp(v, solution.saturated | beyond);
+            guard.record(out, clamped, !beyond, active)
+        } else {
+            // w(t) = y_d(t) - h(v(t - Ts)).
+            let w = desired - h_prev;
             let delayed = Eq5Delayed { w };
             let solution = solve(
                 block,

@@ -109,6 +109,59 @@ pub(crate) struct LaneSolution<T, const W: usize> {
     pub rising: Mask<W>,
 }
 
+impl<T: Real, const W: usize> LaneSolution<T, W> {
+    /// `self` in the lanes of `mask`, `other` elsewhere.
+    #[inline(always)]
+    pub fn select(self, mask: Mask<W>, other: Self) -> Self {
+        LaneSolution {
+            input: self.input.or_keep(mask, other.input),
+            saturated: Mask::choose(mask, self.saturated, other.saturated),
+            alpha: self.alpha.or_keep(mask, other.alpha),
+            beta: self.beta.or_keep(mask, other.beta),
+            moving: self.moving.or_keep(mask, other.moving),
+            rising: Mask::choose(mask, self.rising, other.rising),
+        }
+    }
+}
+
+/// `crate::walk::ReachOnly` lane by lane: the wrapped equation walked without its root, only to
+/// learn which lanes' roots lie beyond the limits.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct ReachOnly<'a, E>(pub &'a E);
+
+impl<T: Real, E: LaneEquation<T, W>, const W: usize> LaneEquation<T, W> for ReachOnly<'_, E> {
+    #[inline(always)]
+    fn residual(&self, x: L<T, W>, alpha: L<T, W>, beta: L<T, W>) -> L<T, W> {
+        self.0.residual(x, alpha, beta)
+    }
+    #[inline(always)]
+    fn control(&self, x: L<T, W>, alpha: L<T, W>, beta: L<T, W>) -> L<T, W> {
+        self.0.control(x, alpha, beta)
+    }
+    #[inline(always)]
+    fn input_at_control(&self, v: L<T, W>, alpha: L<T, W>, beta: L<T, W>) -> L<T, W> {
+        self.0.input_at_control(v, alpha, beta)
+    }
+    #[inline(always)]
+    fn rounding(&self, x: L<T, W>, alpha: L<T, W>, beta: L<T, W>) -> L<T, W> {
+        self.0.rounding(x, alpha, beta)
+    }
+    #[inline(always)]
+    fn root(
+        &self,
+        lo: L<T, W>,
+        _hi: L<T, W>,
+        _f_lo: L<T, W>,
+        _f_hi: L<T, W>,
+        _alpha: L<T, W>,
+        _beta: L<T, W>,
+        _inv: L<T, W>,
+        _active: Mask<W>,
+    ) -> L<T, W> {
+        lo
+    }
+}
+
 /// `crate::walk::PlayBank::solve` for the lanes of `active` (the others' results are
 /// meaningless): walks each lane's segments from its last input in the direction that brings
 /// its residual to zero, keeping the control within `[limit_min, limit_max]`.

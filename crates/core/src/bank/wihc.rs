@@ -6,7 +6,9 @@ use super::lanes::{Lanes, Mask};
 use super::plant::{
     PlantKernel, all_odd_cubic, cubic_lanes, plant_bank, polynomial_lanes, write_lane,
 };
-use super::play::{LaneEquation, LaneSolution, PlayState, feed, feed_solved_or_full, solve};
+use super::play::{
+    LaneEquation, LaneSolution, PlayState, ReachOnly, feed, feed_solved_or_full, solve,
+};
 use super::root::{LaneRemainder, increasing_root};
 use super::run::{BlockKernel, run};
 use super::storage::{BankStorage, Block, Blocks, PlantRows};
@@ -69,7 +71,7 @@ impl<T: Real, S: BankStorage<T, W>, const W: usize> WihcBank<T, S, W> {
         self.kernel.mode
     }
 
-    /// The under-relaxation `lambda` of [`SolveMode::DelayedGuarded`] of `channel` (see
+    /// The under-relaxation `mu` of [`SolveMode::DelayedGuarded`] of `channel` (see
     /// [`crate::Wihc::guard_relaxation`]).
     pub fn guard_relaxation(&self, channel: usize) -> Option<T> {
         (channel < self.channels).then(|| {
@@ -161,6 +163,41 @@ impl<T: Real, R: LaneRemainder<T, W>, const W: usize> LaneEquation<T, W> for Eq9
     }
 }
 
+/// The guarded loop's step on one segment of every lane (`crate::wihc::BankOutput`): the
+/// plant's PI part `alpha v + beta` brought to `target`, in the voltage itself.
+struct BankOutput<T, const W: usize> {
+    target: L<T, W>,
+}
+
+impl<T: Real, const W: usize> LaneEquation<T, W> for BankOutput<T, W> {
+    #[inline(always)]
+    fn residual(&self, x: L<T, W>, alpha: L<T, W>, beta: L<T, W>) -> L<T, W> {
+        alpha * x + beta - self.target
+    }
+    #[inline(always)]
+    fn control(&self, x: L<T, W>, _alpha: L<T, W>, _beta: L<T, W>) -> L<T, W> {
+        x
+    }
+    #[inline(always)]
+    fn input_at_control(&self, v: L<T, W>, _alpha: L<T, W>, _beta: L<T, W>) -> L<T, W> {
+        v
+    }
+    #[inline(always)]
+    fn root(
+        &self,
+        lo: L<T, W>,
+        hi: L<T, W>,
+        _f_lo: L<T, W>,
+        _f_hi: L<T, W>,
+        _alpha: L<T, W>,
+        beta: L<T, W>,
+        inv_alpha: L<T, W>,
+        _active: Mask<W>,
+    ) -> L<T, W> {
+        ((self.target - beta) * inv_alpha).max(lo).min(hi)
+    }
+}
+
 impl PlantKernel<WihcMethod> {
     /// One sample of every lane with the remainder `h` (`crate::wihc::wihc_step`).
     #[inline(always)]
@@ -193,18 +230,50 @@ impl PlantKernel<WihcMethod> {
             let fed = LaneSolution { input: v, ..s };
             feed_solved_or_full(block, rows, &mut state, &fed, active, clamped, self.uniform);
             v
+        } else if self.mode == SolveMode::DelayedGuarded {
+            // `crate::wihc::wihc_step`: beyond reach, the exact solution's limit at once,
+            // counted; otherwise the plant's PI part brought to P1(t - Ts) + mu e(t).
+            let h_prev = remainder.value(v_prev);
+            let p1_prev = state.output();
+            let f_prev = h_prev + p1_prev - desired;
+            let reach = solve(
+                block,
+                rows,
+                &state,
+                &ReachOnly(&equation),
+                f_prev,
+                guard.min,
+                guard.max,
+                active,
+            );
+            let beyond = reach.saturated & active;
+            let relaxation = block.get(rows.scalar(PlantRows::RELAXATION));
+            let relaxed = relaxation.lt(Lanes::splat(T::one()));
+            let target = (p1_prev - relaxation * f_prev).or_keep(relaxed, desired - h_prev);
+            let stepping = active.and_not(beyond);
+            let step = solve(
+                block,
+                rows,
+                &state,
+                &BankOutput { target },
+                p1_prev - target,
+                guard.min,
+                guard.max,
+                stepping,
+            );
+            let s = reach.select(beyond, step);
+            let (out, clamped) = guard.clamp(s.input, s.saturated | beyond);
+            let v = guard.record(out, clamped, !beyond, active);
+            // The solved segment's state when the output is the solution; a full feed of the
+            // clamped output otherwise.
+            let changed = v.compare(s.input, |a, b| a != b);
+            let fed = LaneSolution { input: v, ..s };
+            feed_solved_or_full(block, rows, &mut state, &fed, active, changed, self.uniform);
+            v
         } else {
             // H[v](t - Ts) = h(v(t - Ts)) + sum b_i F_{r_i}[v](t - Ts).
             let h_prev = remainder.value(v_prev) + state.memory_sum;
-            let relaxation = block.get(rows.scalar(PlantRows::RELAXATION));
-            let guarded = if self.mode == SolveMode::DelayedGuarded {
-                relaxation.lt(Lanes::splat(T::one()))
-            } else {
-                Mask::splat(false)
-            };
-            let inverse_a2 = state.inverse_a;
-            let relaxed = v_prev + relaxation * (desired - h_prev - state.a * v_prev) * inverse_a2;
-            let next = relaxed.or_keep(guarded, (desired - h_prev) * inverse_a2);
+            let next = (desired - h_prev) * state.inverse_a;
             let (out, clamped) = guard.clamp(next, Mask::splat(false));
             // A clamped sample counts as a loop saturation when the exact eq. (9) could have
             // been met within the limits from the same state (solved only then).
