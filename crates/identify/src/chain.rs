@@ -55,6 +55,10 @@ pub const MAX_DECIMATION: usize = 1000;
 pub struct CreepOptions {
     /// Time constants `tau_i`, s: positive, increasing, at most [`MAX_CREEP_ELEMENTS`].
     pub time_constants_s: Vec<f64>,
+    /// Weight of the smoothness penalty on neighbouring creep weights (0: none; see
+    /// [`FitProblem::with_extra_smoothness`]).
+    #[serde(default)]
+    pub smoothness: f64,
 }
 
 impl CreepOptions {
@@ -68,7 +72,18 @@ impl CreepOptions {
             time_constants_s.push(tau);
             tau *= step;
         }
-        CreepOptions { time_constants_s }
+        CreepOptions {
+            time_constants_s,
+            smoothness: 0.0,
+        }
+    }
+
+    /// The same time constants with the creep weights' smoothness penalty `lambda`.
+    pub fn with_smoothness(self, lambda: f64) -> CreepOptions {
+        CreepOptions {
+            smoothness: lambda,
+            ..self
+        }
     }
 
     fn validate(&self, period_s: f64) -> Result<(), IdentifyError> {
@@ -571,7 +586,8 @@ fn joint_creep_solve(
         true,
         options.margin,
         &column_refs,
-    )?;
+    )?
+    .with_extra_smoothness(creep.smoothness)?;
     let condition = problem.condition_number();
     if condition.is_nan() || condition > options.max_condition {
         return Err(IdentifyError::IllConditioned {

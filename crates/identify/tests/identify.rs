@@ -777,3 +777,73 @@ fn replay_counts_the_delayed_loops_clamps_after_a_jump() {
         "{json}"
     );
 }
+
+proptest! {
+    #![proptest_config(seeded(24, 11))]
+
+    /// The creep weights' smoothness penalty (FitProblem::with_extra_smoothness) adds exactly
+    /// `lambda^2 sum_j (e_j+1 - e_j)^2` to the squared cost of any parameter vector: the
+    /// re-factored problem against the plain formula on the unpenalised one; lambda = 0 leaves
+    /// the cost alone, and a heavy penalty makes the solved extra parameters equal.
+    #[test]
+    fn the_smoothness_penalty_adds_the_squared_differences_of_the_extra_parameters(
+        seed in any::<u64>(), n in 1usize..12, extra in 2usize..6, lambda in 0.0f64..3.0,
+    ) {
+        let mut rng = ChaCha8Rng::seed_from_u64(seed);
+        let truth = random_plant(&mut rng, n);
+        let x = excitation(&mut rng, 20);
+        let y: Vec<f64> = run(&truth, &x).iter().map(|y| y + 0.01 * rng.random::<f64>()).collect();
+        let columns: Vec<Vec<f64>> = (0..extra)
+            .map(|_| x.iter().map(|_| rng.random_range(-1.0..1.0)).collect())
+            .collect();
+        let refs: Vec<&[f64]> = columns.iter().map(|c| c.as_slice()).collect();
+        let data = || ProblemData { input: &x, output: &y, fit: 0..x.len() };
+        let plain = FitProblem::with_extra_columns(
+            data(), &uniform(n), Direction::Plant, true, 1e-3, &refs,
+        ).unwrap();
+        let smooth = plain.clone().with_extra_smoothness(lambda).unwrap();
+        prop_assert_eq!(smooth.dimension(), plain.dimension());
+        for _ in 0..5 {
+            let theta: Vec<f64> =
+                (0..plain.dimension()).map(|_| rng.random_range(-1.0..1.0)).collect();
+            let e = plain.extra_parameters(&theta);
+            let penalty: f64 = e.windows(2).map(|w| (w[1] - w[0]).powi(2)).sum();
+            let expected = (plain.cost(&theta).powi(2) + lambda * lambda * penalty).sqrt();
+            prop_assert!(
+                (smooth.cost(&theta) - expected).abs() <= 1e-9 * (1.0 + expected),
+                "{} vs {}", smooth.cost(&theta), expected
+            );
+        }
+        let heavy = plain.clone().with_extra_smoothness(1e4).unwrap();
+        let solved = LeastSquares.solve(&heavy, &mut NoObserver).unwrap();
+        let e = heavy.extra_parameters(&solved.theta);
+        let spread = e.iter().fold(f64::NEG_INFINITY, |a, b| a.max(*b))
+            - e.iter().fold(f64::INFINITY, |a, b| a.min(*b));
+        prop_assert!(spread <= 1e-4, "{e:?}");
+    }
+}
+
+#[test]
+fn the_smoothness_penalty_refuses_a_negative_or_non_finite_weight() {
+    let mut rng = ChaCha8Rng::seed_from_u64(3);
+    let x = excitation(&mut rng, 10);
+    let y = run(&random_plant(&mut rng, 5), &x);
+    let column: Vec<f64> = x.iter().map(|v| v * v).collect();
+    let p = FitProblem::with_extra_columns(
+        ProblemData {
+            input: &x,
+            output: &y,
+            fit: 0..x.len(),
+        },
+        &uniform(5),
+        Direction::Plant,
+        true,
+        1e-3,
+        &[&column, &column],
+    )
+    .unwrap();
+    for bad in [-1.0, f64::NAN, f64::INFINITY] {
+        let error = p.clone().with_extra_smoothness(bad).unwrap_err();
+        assert!(error.to_string().contains("creep smoothness"), "{error}");
+    }
+}

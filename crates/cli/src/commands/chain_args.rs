@@ -85,6 +85,7 @@ impl ChainArgs {
         let creep = self.has_creep().then(|| match &self.creep_time_constants {
             Some(t) => CreepOptions {
                 time_constants_s: t.clone(),
+                smoothness: 0.0,
             },
             None => {
                 // From 10 ms (or two decimated periods) to a quarter of the record (at most

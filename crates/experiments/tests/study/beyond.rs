@@ -31,7 +31,10 @@ pub fn the_full_pipeline_and_the_duration_and_speed_studies_measure_what_they_cl
         .iter()
         .map(|c| c.segment_rms_percent.unwrap())
         .collect();
-    assert!(segment[2] < 0.3 * segment[1], "vibration: {segment:?}");
+    // On the vibration segment the vibration link removes two thirds of the error (measured
+    // 0.470 -> 0.152 %; 0.458 -> 0.108 % before the creep weights were smoothed, when the
+    // 10 ms creep element sat at its floor).
+    assert!(segment[2] < 0.4 * segment[1], "vibration: {segment:?}");
     let dynamics = plant.dynamics.as_ref().unwrap();
     assert!(
         dynamics
@@ -41,11 +44,24 @@ pub fn the_full_pipeline_and_the_duration_and_speed_studies_measure_what_they_cl
         "the stage's 800 Hz resonance: {:?}",
         dynamics.modes
     );
+    // The creep weights, smoothed at time constants up to 100 s: none at its floor (a bank to
+    // 1000 s without the smoothing left three of eleven there).
+    let weights = &plant.creep.as_ref().unwrap().part.weights;
+    assert_eq!(weights.len(), 9, "{weights:?}");
+    let largest = weights.iter().copied().fold(0.0, f64::max);
+    assert!(weights.iter().all(|w| *w > 0.5 * largest), "{weights:?}");
     // 20 s: the full IHC beats the exact one (creep), but not the 0.25 % target: the
-    // hysteresis model's mismatch alone leaves 0.27 % (the ablation).
+    // hysteresis model's mismatch alone leaves 0.27 % (the ablation). Measured 0.269 % (IHC)
+    // and 0.462 % (DIHC).
     let full_ihc = full.runs[0].indices.e_rms_percent;
     assert!(full_ihc < exact.runs[0].indices.e_rms_percent);
-    close_to(full_ihc, 0.298, 0.02, "full / ihc e_rms over 20 s");
+    close_to(full_ihc, 0.269, 0.02, "full / ihc e_rms over 20 s");
+    close_to(
+        full.runs[2].indices.e_rms_percent,
+        0.462,
+        0.03,
+        "full / dihc e_rms over 20 s",
+    );
     // 200 s: the exact IHC drifts away, the full one holds (issue 11: <= 0.30 %).
     let series = |label: &str| {
         study
@@ -71,7 +87,8 @@ pub fn the_full_pipeline_and_the_duration_and_speed_studies_measure_what_they_cl
     };
     assert!(hold("exact / ihc") > 1.0, "{}", hold("exact / ihc"));
     assert!(hold("full / ihc") < 0.3 * hold("exact / ihc"));
-    close_to(hold("full / ihc"), 0.250, 0.05, "full / ihc drift");
+    close_to(hold("full / ihc"), 0.179, 0.04, "full / ihc drift");
+    close_to(hold("full / dihc"), 0.135, 0.04, "full / dihc drift");
     // Speed: the paper's trajectory at 10x (issue 11: <= 0.35 %), better than exact's.
     let paper10 = study
         .speed
@@ -101,9 +118,15 @@ pub fn the_full_pipeline_and_the_duration_and_speed_studies_measure_what_they_cl
     assert!(r_full < 0.5 * raster(&study.speed.raster_strong_amplifier, "exact / ihc"));
     close_to(
         r_full,
-        1.06,
-        0.15,
+        0.824,
+        0.1,
         "full raster at 100 Hz, strong amplifier",
+    );
+    close_to(
+        raster(&study.speed.raster, "full / ihc"),
+        0.963,
+        0.1,
+        "full raster at 100 Hz, built-in amplifier",
     );
     // Every figure of the issue is in the summary, met or not.
     let checks = &summary.beyond.checks;
