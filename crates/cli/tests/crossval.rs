@@ -461,3 +461,138 @@ fn dbo_crossval_with_n_auto_replays_the_best_compensator_within_1_2_percent() {
     eprintln!("DBO crossval -n auto: n = {n}, best replay RMS {best:.3} %");
     assert!(best <= 1.2, "best replay {best} % with n = {n}");
 }
+
+/// One record in one file, with measurement noise: the training cycle, then the test shape.
+fn one_record(dir: &Path) -> (PathBuf, usize) {
+    let ((v, y), (tv, ty)) = records();
+    let voltage = [v, tv].concat();
+    let displacement: Vec<f64> = [y, ty]
+        .concat()
+        .iter()
+        .enumerate()
+        .map(|(k, y)| y + 0.2 * (1.7 * k as f64).sin())
+        .collect();
+    let path = dir.join("record.csv");
+    write_csv(&path, &["volts", "um"], &[&voltage, &displacement]);
+    (path, voltage.len())
+}
+
+/// Consecutive row ranges of one file: crossval carries the operators' memory from the end of
+/// the training rows into the test rows (said on stderr and in --json), and its figure is
+/// `identify --holdout`'s for the same split, both in % of the test span's own displacement
+/// range (its denominator in both reports). From rest (`--test-start rest`) the start is said
+/// too, and the first test samples are another prediction.
+#[test]
+fn consecutive_spans_carry_memory_and_match_identify_holdout() {
+    let dir = tempfile::tempdir().unwrap();
+    let (record, rows) = one_record(dir.path());
+    let columns = ["--voltage-column", "volts", "--displacement-column", "um"];
+    let model = dir.path().join("model.json");
+    let out = hystcomp(
+        &[
+            &["--json", "identify", "--data", s(&record)][..],
+            &columns,
+            &["--warmup", "0", "--holdout", "0.3", "-o", s(&model)],
+        ]
+        .concat(),
+    );
+    assert!(out.status.success(), "{}", stderr(&out));
+    let doc: Value = serde_json::from_slice(&out.stdout).unwrap();
+    let holdout = &doc["report"]["holdout"];
+    let fitted = doc["report"]["samples"]["fit"].as_u64().unwrap() as usize;
+    assert_eq!(doc["report"]["samples"]["warmup"], 0);
+    let train_rows = format!("1..{fitted}");
+    let test_rows = format!("{}..{rows}", fitted + 1);
+    let predictions = dir.path().join("predictions.csv");
+    let run = |test_rows: &str, extra: &[&str]| {
+        let args = [
+            &[
+                "--json",
+                "crossval",
+                "--train",
+                s(&record),
+                "--test",
+                s(&record),
+            ][..],
+            &columns,
+            &[
+                "--train-rows",
+                &train_rows,
+                "--test-rows",
+                test_rows,
+                "--warmup",
+                "0",
+            ],
+            extra,
+        ]
+        .concat();
+        let out = hystcomp(&args);
+        assert!(out.status.success(), "{}", stderr(&out));
+        let doc: Value = serde_json::from_slice(&out.stdout).unwrap();
+        (doc["report"]["test"].clone(), stderr(&out))
+    };
+    let (carried, note) = run(&test_rows, &["--predictions", s(&predictions)]);
+    assert_eq!(carried["start"], "continue_training");
+    assert_eq!(carried["preceding_samples"], fitted);
+    assert_eq!(carried["warmup"], 0);
+    assert!(
+        note.contains("continued from the end of the training record")
+            && note.contains("consecutive row ranges"),
+        "{note}"
+    );
+    let figure = |v: &Value| v["rms_percent"].as_f64().unwrap();
+    let (a, b) = (figure(holdout), figure(&carried["forward"]));
+    assert!(
+        (a - b).abs() <= 1e-9 * a,
+        "identify --holdout {a} % vs crossval {b} %"
+    );
+    // The same denominator, written in both reports: the test span's displacement range.
+    let range = holdout["range"].as_f64().unwrap();
+    assert!((range - carried["ranges"]["displacement"].as_f64().unwrap()).abs() <= 1e-9 * range);
+    assert!((range - carried["forward"]["range"].as_f64().unwrap()).abs() <= 1e-9 * range);
+    // --predictions runs the models as the validation does: its RMS is the report's.
+    let (header, columns_read) = read_predictions(&predictions);
+    let error = header.iter().position(|h| h == "error_um").unwrap();
+    let rms = (columns_read[error].iter().map(|e| e * e).sum::<f64>()
+        / columns_read[error].len() as f64)
+        .sqrt();
+    assert!(
+        (100.0 * rms / range - b).abs() <= 1e-6 * b,
+        "{rms} vs {b} %"
+    );
+
+    let (rest, note) = run(&test_rows, &["--test-start", "rest", "--test-warmup", "0"]);
+    assert_eq!(rest["start"], "rest");
+    assert_eq!(rest["preceding_samples"], 0);
+    assert!(
+        note.contains("at rest at the test record's first sample"),
+        "{note}"
+    );
+    assert!(
+        (figure(&rest["forward"]) - b).abs() > 1e-6 * b,
+        "starting from rest should change the prediction of the first test samples"
+    );
+    // Separate files (or non-consecutive rows) start at rest by default, and say how to carry.
+    let (separate, note) = run("1..2000", &[]);
+    assert_eq!(separate["start"], "rest");
+    assert!(note.contains("--test-start continue"), "{note}");
+}
+
+/// The header and columns of a CSV of numbers.
+fn read_predictions(path: &Path) -> (Vec<String>, Vec<Vec<f64>>) {
+    let text = std::fs::read_to_string(path).unwrap();
+    let mut lines = text.lines();
+    let header: Vec<String> = lines
+        .next()
+        .unwrap()
+        .split(',')
+        .map(str::to_owned)
+        .collect();
+    let mut columns = vec![Vec::new(); header.len()];
+    for line in lines {
+        for (c, v) in line.split(',').enumerate() {
+            columns[c].push(v.parse().unwrap());
+        }
+    }
+    (header, columns)
+}

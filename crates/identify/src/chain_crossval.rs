@@ -7,7 +7,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::{
     ChainOptions, ChainReport, CrossValidation, CrossvalOptions, CrossvalReport, IdentifyError,
-    Record, identify_chain, identify_inverse_chain, validate_models,
+    Record, identify_chain, identify_inverse_chain, validate_models_from,
 };
 use hystcomp_io::model_file::Direction;
 
@@ -47,10 +47,11 @@ pub fn crossval_chain(
         plant.report.hysteresis.input.min,
         plant.report.hysteresis.input.max,
     ];
-    let test_report = validate_models(
+    let test_report = validate_models_from(
         &plant.model,
         &inverse.model,
         limits,
+        crate::crossval::preceding(train, options.test_start),
         test,
         options.test_warmup,
         options.unstable_delay,

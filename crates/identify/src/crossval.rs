@@ -44,17 +44,57 @@ pub struct CrossvalOptions {
     /// How both models are identified on the training record (the direction is ignored: a
     /// plant model and an inverse model are identified).
     pub identify: IdentifyOptions,
-    /// Samples at the start of the test record left out of the errors (all compensators and
-    /// the forward model start from their reset state at the first test sample). `Auto` (and
-    /// `Estimate`) ends at the first sample whose voltage is within
+    /// Samples at the start of the test record left out of the errors. `Auto` (and
+    /// `Estimate`): with [`TestStart::Rest`], up to the first sample whose voltage is within
     /// [`AUTO_WARMUP_LEVEL`](crate::AUTO_WARMUP_LEVEL) (5 %) of the test record's voltage range
-    /// from its minimum (identification's [`Warmup::Auto`] is stricter).
+    /// from its minimum (identification's [`Warmup::Auto`] is stricter); with
+    /// [`TestStart::ContinueTraining`] none (the memory is known).
     pub test_warmup: Warmup,
+    /// Where the models and compensators start on the test record: from rest, or carrying
+    /// their memory from the end of the training record when the test record continues it.
+    #[serde(default)]
+    pub test_start: TestStart,
     /// Whether the plain delayed compensators (`ihc-delayed`, `wihc-delayed`) are replayed
     /// even when their loop gain over the limits is 1 or more (by default they are reported as
     /// not built, with the reason).
     #[serde(default)]
     pub unstable_delay: UnstableDelay,
+}
+
+/// Where the models and the compensators start on the test record.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum TestStart {
+    /// At rest at the test record's first sample: every play operator at zero memory (eq.
+    /// (1)), so that the first sample acts as if the drive had risen from the bottom of the
+    /// model's input range to it (the stage at rest at its lowest drive before the record), a
+    /// creep link settled at the first sample. The test warm-up leaves out the samples whose
+    /// prediction depends on the unknown history. The default: right for two separate records.
+    #[default]
+    Rest,
+    /// The test record continues the training record (consecutive spans of one record): the
+    /// models and the compensators first run over the training record, from rest at its first
+    /// sample, and carry their memory into the test record, whose first sample is then
+    /// predicted as the whole record's prediction predicts it.
+    ContinueTraining,
+}
+
+impl TestStart {
+    /// The initial state in words, for reports (`warmup` test samples left out).
+    pub fn describe(self, preceding: usize, warmup: usize) -> String {
+        match self {
+            TestStart::Rest => format!(
+                "at rest at the test record's first sample (operators at zero memory, as after \
+                 the drive rose from the bottom of the model's input range; creep settled \
+                 there); the first {warmup} test samples left out as warm-up"
+            ),
+            TestStart::ContinueTraining => format!(
+                "continued from the end of the training record: models and compensators ran \
+                 over its {preceding} samples first (from rest) and carried their memory into \
+                 the test record; {warmup} test samples left out as warm-up"
+            ),
+        }
+    }
 }
 
 /// The replay of one compensator over the test record.
@@ -97,6 +137,23 @@ pub struct Validation {
     pub samples: usize,
     /// Samples at its start left out of the errors.
     pub warmup: usize,
+    /// Where the models and compensators started (reports written before this field existed
+    /// started at rest).
+    #[serde(default)]
+    pub start: TestStart,
+    /// The samples run before the test record's first ([`TestStart::ContinueTraining`]: the
+    /// training record's; 0 at rest).
+    #[serde(default)]
+    pub preceding_samples: usize,
+    /// The initial state in words ([`TestStart::describe`]).
+    #[serde(default)]
+    pub initial_state: String,
+    /// The denominators of every percentage: the test record's displacement and voltage
+    /// ranges over the evaluated span (after the warm-up), physical units. The forward error
+    /// is in % of the first, the replay errors in % of the second (the same normalisation as
+    /// `identify`'s held-out error: the test span's own range).
+    #[serde(default)]
+    pub ranges: TestRanges,
     /// The output limits of the compensators: the voltage range the plant model was fitted on
     /// (physical; the training record after its warm-up, without its hold-out).
     pub voltage_limits: [f64; 2],
@@ -115,6 +172,15 @@ pub struct Validation {
     pub forward: ErrorStats,
     /// The offline inverse replay of each compensator.
     pub replay: Vec<Replay>,
+}
+
+/// The ranges the percentages of a [`Validation`] refer to.
+#[derive(Debug, Clone, Copy, PartialEq, Default, Serialize, Deserialize)]
+pub struct TestRanges {
+    /// `max - min` of the measured displacement over the evaluated span.
+    pub displacement: f64,
+    /// `max - min` of the applied voltage over the evaluated span.
+    pub voltage: f64,
 }
 
 /// A cross-validation: the report and both identified models.
@@ -154,10 +220,11 @@ pub fn crossval(
     )?;
     // The compensators' output limits: the voltage range the plant model was fitted on.
     let limits = [plant.report.input.min, plant.report.input.max];
-    let test_report = validate_models(
+    let test_report = validate_models_from(
         &plant.model,
         &inverse.model,
         limits,
+        preceding(train, options.test_start),
         test,
         options.test_warmup,
         options.unstable_delay,
@@ -173,6 +240,64 @@ pub fn crossval(
     })
 }
 
+/// The record run before the test record: the training record when the test record
+/// continues it.
+pub(crate) fn preceding(train: Record<'_>, start: TestStart) -> Option<Record<'_>> {
+    (start == TestStart::ContinueTraining).then_some(train)
+}
+
+/// Validates a plant model and an inverse model on a record, from rest at its first sample
+/// ([`TestStart::Rest`]; see [`validate_models_from`]).
+pub fn validate_models(
+    plant: &ModelFile,
+    inverse: &ModelFile,
+    voltage_limits: [f64; 2],
+    test: Record<'_>,
+    warmup: Warmup,
+    unstable_delay: UnstableDelay,
+) -> Result<Validation, IdentifyError> {
+    validate_models_from(
+        plant,
+        inverse,
+        voltage_limits,
+        None,
+        test,
+        warmup,
+        unstable_delay,
+    )
+}
+
+/// The models' predictions over the test record, as [`validate_models_from`] runs them: the
+/// plant model's displacement from the applied voltage and the inverse model's voltage from
+/// the measured displacement (physical units, one per test sample), each run first over
+/// `preceding` when given (the memory carried into the test record) and otherwise from rest,
+/// a creep link settled at the first sample run.
+pub fn predict_test(
+    plant: &ModelFile,
+    inverse: &ModelFile,
+    preceding: Option<Record<'_>>,
+    test: Record<'_>,
+) -> Result<(Vec<f64>, Vec<f64>), IdentifyError> {
+    let (voltage, displacement) = joined(preceding, test);
+    let skip = voltage.len() - test.voltage.len();
+    let mut forward = plant.predict_settled(&voltage)?;
+    let mut backward = inverse.predict_settled(&displacement)?;
+    forward.drain(..skip);
+    backward.drain(..skip);
+    Ok((forward, backward))
+}
+
+/// The preceding record (if any) followed by the test record.
+fn joined(preceding: Option<Record<'_>>, test: Record<'_>) -> (Vec<f64>, Vec<f64>) {
+    match preceding {
+        None => (test.voltage.to_vec(), test.displacement.to_vec()),
+        Some(p) => (
+            [p.voltage, test.voltage].concat(),
+            [p.displacement, test.displacement].concat(),
+        ),
+    }
+}
+
 /// Validates a plant model and an inverse model on a record:
 ///
 /// - (a) the plant model's prediction of the measured displacement from the applied voltage;
@@ -182,21 +307,35 @@ pub fn crossval(
 ///   range). A plain delayed loop whose gain over the limits is 1 or more is not built (the
 ///   replay says why) unless `unstable_delay` allows it.
 ///
-/// Everything starts from its reset state at the first sample; errors are taken after the
-/// warm-up, over at least as many samples as identifying the plant model needs
+/// Everything starts from its reset state at the first sample of `preceding` when given (the
+/// record the test record continues: [`TestStart::ContinueTraining`], whose memory is
+/// carried into the test record, and whose samples are not scored), or else of the test
+/// record ([`TestStart::Rest`]). Errors are taken on the test record after the warm-up
+/// (`Auto`: none after a preceding record, see [`CrossvalOptions::test_warmup`]), in % of
+/// the test span's own displacement range (forward) and voltage range (replay), over at least as many samples as identifying the plant model needs
 /// ([`SAMPLES_PER_PARAMETER`](crate::SAMPLES_PER_PARAMETER) per parameter, counted as
 /// [`identify`](crate::identify) counts them: `a1`, `a2` and the `n` weights, less one when
 /// `r_1 = 0`, plus the output offset when the plant model's report says it was fitted or the
 /// model has no report; fewer give [`IdentifyError::Data`]).
-pub fn validate_models(
+pub fn validate_models_from(
     plant: &ModelFile,
     inverse: &ModelFile,
     voltage_limits: [f64; 2],
+    preceding: Option<Record<'_>>,
     test: Record<'_>,
     warmup: Warmup,
     unstable_delay: UnstableDelay,
 ) -> Result<Validation, IdentifyError> {
     test.check()?;
+    if let Some(p) = &preceding {
+        p.check()?;
+    }
+    let start_kind = if preceding.is_some() {
+        TestStart::ContinueTraining
+    } else {
+        TestStart::Rest
+    };
+    let pre = preceding.map_or(0, |p| p.voltage.len());
     let wrong = |what: &str, file: &ModelFile, expected: Direction| {
         (file.direction != expected).then(|| IdentifyError::InvalidOption {
             option: "model direction",
@@ -211,10 +350,11 @@ pub fn validate_models(
         return Err(e);
     }
     let samples = test.voltage.len();
-    let start = match warmup {
+    let start = match (warmup, start_kind) {
+        (Warmup::Auto | Warmup::Estimate, TestStart::ContinueTraining) => 0,
         // Nothing is fitted on the test record: estimating its memory means nothing there.
-        Warmup::Auto | Warmup::Estimate => auto_warmup(test.voltage),
-        Warmup::Samples(n) => n,
+        (Warmup::Auto | Warmup::Estimate, TestStart::Rest) => auto_warmup(test.voltage),
+        (Warmup::Samples(n), _) => n,
     };
     if start >= samples {
         return Err(IdentifyError::InvalidOption {
@@ -240,8 +380,10 @@ pub fn validate_models(
     let displacement_range = range_of(&test.displacement[span.clone()]);
 
     // (a) Forward prediction (a creep link taken at rest at the record's start: a measured
-    // record starts in the middle of a history).
-    let predicted = plant.predict_settled(test.voltage)?;
+    // record starts in the middle of a history), through the preceding record if any.
+    let (all_voltage, all_displacement) = joined(preceding, test);
+    let mut predicted = plant.predict_settled(&all_voltage)?;
+    predicted.drain(..pre);
     // A prediction or an error that overflows would make the RMS inf: refused, naming the
     // sample (the values read are bounded, but arrays from the bindings need not be).
     if let Some(k) = span.clone().find(|&k| {
@@ -293,28 +435,29 @@ pub fn validate_models(
                 continue;
             }
         };
-        compensator.settle_creep(test.displacement[0]);
-        let mut voltage = Vec::with_capacity(samples);
+        compensator.settle_creep(all_displacement[0]);
+        let mut voltage = Vec::with_capacity(all_displacement.len());
         let mut before = compensator.diagnostics();
         if compensator.preview() > 0 {
             // A chain with a vibration link inverts over a preview: the whole record at once,
             // aligned (its clamps are counted over the whole record, warm-up included).
-            voltage.resize(samples, 0.0);
+            voltage.resize(all_displacement.len(), 0.0);
             compensator
-                .process(test.displacement, &mut voltage)
+                .process(&all_displacement, &mut voltage)
                 .map_err(|e| IdentifyError::InvalidOption {
                     option: "replay",
                     value: method.name().to_owned(),
                     reason: e.to_string(),
                 })?;
         } else {
-            for (k, &y_d) in test.displacement.iter().enumerate() {
-                if k == start {
+            for (k, &y_d) in all_displacement.iter().enumerate() {
+                if k == pre + start {
                     before = compensator.diagnostics();
                 }
                 voltage.push(compensator.step(y_d));
             }
         }
+        voltage.drain(..pre);
         let after = compensator.diagnostics();
         replay.push(Replay {
             compensator: method.name().to_owned(),
@@ -339,6 +482,13 @@ pub fn validate_models(
     Ok(Validation {
         samples,
         warmup: start,
+        start: start_kind,
+        preceding_samples: pre,
+        initial_state: start_kind.describe(pre, start),
+        ranges: TestRanges {
+            displacement: displacement_range,
+            voltage: voltage_range,
+        },
         voltage_limits,
         delayed_loop_gains,
         voltage_outside_model_range,
@@ -361,7 +511,7 @@ fn offset_fitted(plant: &ModelFile) -> bool {
 }
 
 /// `max - min`, or 1 for a constant span (so that percentages stay finite).
-fn range_of(values: &[f64]) -> f64 {
+pub(crate) fn range_of(values: &[f64]) -> f64 {
     let (lo, hi) = min_max(values);
     if hi > lo { hi - lo } else { 1.0 }
 }

@@ -55,9 +55,10 @@ pub fn identify(
 /// 3. Normalisation: `x = (input - min) / (max - min)` with min and max over the **fitted
 ///    samples** (neither the warm-up, whose transient the model is not fitted to, nor the
 ///    hold-out, which must not inform the model), so that the thresholds `(i - 1)/n` are
-///    fractions of the fitted input range (eq. (11)) and every "% of the output range" refers
-///    to the fitted output range `(output - offset) / (max - min)`, with the offset of
-///    [`OutputOffset`]. The operators still run over the whole record from zero memory
+///    fractions of the fitted input range (eq. (11)) and the fit's "% of the output range"
+///    refers to the fitted output range `(output - offset) / (max - min)`, with the offset of
+///    [`OutputOffset`] (the held-out error to the held-out span's own range, as `crossval`'s
+///    to the test span's). The operators still run over the whole record from zero memory
 ///    (eq. (1)), warm-up included (with [`Warmup::Estimate`], from the memory of the estimated
 ///    virtual history); warm-up and hold-out samples may fall outside `[0, 1]`.
 /// 4. The chosen solver minimises the RMS error under the invertibility constraints of
@@ -281,7 +282,16 @@ pub fn identify_observed(
         .collect();
     let fit_stats = ErrorStats::new(&predicted[fit.clone()], &output[fit.clone()], y_scale)
         .expect("the fitting span is not empty");
-    let holdout_stats = ErrorStats::new(&predicted[fit.end..], &output[fit.end..], y_scale);
+    // The held-out error in % of the held-out span's own output range: the test span's range,
+    // as `crossval` normalises (a split of one record gives the same figure both ways).
+    let holdout_stats = (fit.end < total).then(|| {
+        ErrorStats::new(
+            &predicted[fit.end..],
+            &output[fit.end..],
+            crate::crossval::range_of(&output[fit.end..]),
+        )
+        .expect("the held-out span is not empty")
+    });
     if let Some(limit) = options.max_fit_rms_percent {
         if fit_stats.rms_percent.is_nan() || fit_stats.rms_percent > limit {
             // A swarm far from the optimum is not bad data: say so, with the optimum beside it.

@@ -19,8 +19,8 @@ pub struct OrderCandidate {
     pub operators: usize,
     /// RMS error over the fitted samples, % of the fitted output range.
     pub fit_rms_percent: f64,
-    /// RMS error over the held-out samples, % of the fitted output range (NaN when the fit
-    /// failed).
+    /// RMS error over the held-out samples, % of their own output range (the same for every
+    /// candidate; NaN when the fit failed).
     pub holdout_rms_percent: f64,
 }
 
@@ -69,7 +69,6 @@ pub fn select_operators(
                 let Some(h) = fit.report.holdout else {
                     continue;
                 };
-                // Both in % of the fitted output range.
                 tried.push(OrderCandidate {
                     operators: n,
                     fit_rms_percent: fit.report.fit.rms_percent,

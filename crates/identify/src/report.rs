@@ -176,7 +176,11 @@ pub struct FitReport {
     pub output_offset: f64,
     /// Errors over the fitting span, in the output's unit and % of the output range.
     pub fit: ErrorStats,
-    /// Errors over the held-out span, if any.
+    /// Errors over the held-out span, if any, in % of **the held-out span's own** output range
+    /// (its `range`; the test span's range, as `crossval` normalises: the model runs on from
+    /// the fitted samples into the held-out ones, so that the figure is the one `crossval`
+    /// gives for the same split of the record). Reports written before issue 10 used the
+    /// fitted output range.
     pub holdout: Option<ErrorStats>,
     /// Condition number of the column-scaled regressor matrix.
     pub condition_number: f64,

@@ -3,7 +3,7 @@
 
 use std::path::PathBuf;
 
-use hystcomp_identify::{CrossvalOptions, IdentifyError, Record, Warmup, crossval};
+use hystcomp_identify::{CrossvalOptions, IdentifyError, Record, TestStart, Warmup, crossval};
 use hystcomp_io::compensator::UnstableDelay;
 use hystcomp_io::data::{Column, RowRange};
 use hystcomp_io::model_file::Direction;
@@ -42,10 +42,19 @@ pub struct Args {
     /// Rows of the test file (instead of --rows), FIRST..LAST.
     #[arg(long, value_name = "FIRST..LAST", value_parser = parse_rows)]
     pub test_rows: Option<RowRange>,
-    /// Test samples left out of the errors at the start: a number, or auto (up to the first
-    /// sample within 5 % of the test voltage range from its minimum).
+    /// Test samples left out of the errors at the start: a number, or auto (none when the
+    /// test record continues the training record; otherwise up to the first sample within
+    /// 5 % of the test voltage range from its minimum).
     #[arg(long, default_value = "auto", value_name = "N|auto")]
     pub test_warmup: String,
+    /// Where the models and compensators start on the test record: continue (run over the
+    /// training record first and carry the operators' memory into the test record, for
+    /// consecutive spans of one record), rest (operators at zero memory at the test record's
+    /// first sample, as after the drive rose from the bottom of the range), or auto (continue
+    /// when --train and --test are the same file with consecutive row ranges, e.g.
+    /// --train-rows 1..3000 --test-rows 3001..4000; rest otherwise). Said on stderr.
+    #[arg(long, default_value = "auto", value_name = "auto|continue|rest", value_parser = parse_start)]
+    pub test_start: StartArg,
     #[command(flatten)]
     pub fit: FitArgs,
     #[command(flatten)]
@@ -84,6 +93,62 @@ impl NamesFiles for Args {
             .maybe_output("--save-plant", self.save_plant.as_ref())
             .maybe_output("--save-inverse", self.save_inverse.as_ref())
             .maybe_output("--predictions", self.predictions.as_ref())
+    }
+}
+
+/// `--test-start`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum StartArg {
+    /// Continue when the records are consecutive spans of one file, rest otherwise.
+    Auto,
+    /// The given start.
+    Given(TestStart),
+}
+
+fn parse_start(text: &str) -> Result<StartArg, String> {
+    match text.trim().to_ascii_lowercase().as_str() {
+        "auto" => Ok(StartArg::Auto),
+        "continue" => Ok(StartArg::Given(TestStart::ContinueTraining)),
+        "rest" => Ok(StartArg::Given(TestStart::Rest)),
+        _ => Err(format!("expected auto, continue or rest, got {text:?}")),
+    }
+}
+
+impl Args {
+    /// Whether the test record is the span of the training file right after the training
+    /// span: the same file (same path once resolved), the same columns, and row ranges
+    /// `A..B` and `B+1..`.
+    fn consecutive_spans(&self) -> bool {
+        let same_file = match (self.train.canonicalize(), self.test.canonicalize()) {
+            (Ok(a), Ok(b)) => a == b,
+            _ => false,
+        };
+        let c = &self.columns;
+        let same_columns = [
+            (&self.test_voltage_column, &c.voltage_column),
+            (&self.test_displacement_column, &c.displacement_column),
+        ]
+        .iter()
+        .all(|(test, train)| test.as_ref().is_none_or(|t| t == *train))
+            && self
+                .test_time_column
+                .as_ref()
+                .is_none_or(|t| c.time_column.as_ref() == Some(t));
+        let train_rows = self.train_rows.or(c.rows);
+        let test_rows = self.test_rows.or(c.rows);
+        let consecutive = matches!(
+            (train_rows, test_rows),
+            (Some(RowRange { last: Some(last), .. }), Some(test)) if test.first == last + 1
+        );
+        same_file && same_columns && consecutive
+    }
+
+    fn test_start(&self) -> TestStart {
+        match self.test_start {
+            StartArg::Given(start) => start,
+            StartArg::Auto if self.consecutive_spans() => TestStart::ContinueTraining,
+            StartArg::Auto => TestStart::Rest,
+        }
     }
 }
 
@@ -146,9 +211,11 @@ pub fn run(args: &Args, ctx: Context) -> Result<(), CliError> {
     let identify = args
         .fit
         .options(c, Direction::Plant, args.holdout, &train)?;
+    let test_start = args.test_start();
     let options = CrossvalOptions {
         identify,
         test_warmup,
+        test_start,
         unstable_delay: if args.allow_unstable_delay {
             UnstableDelay::Allow
         } else {
@@ -211,8 +278,20 @@ pub fn run(args: &Args, ctx: Context) -> Result<(), CliError> {
     }
 
     let report = &cv.report;
+    errln!(
+        "hystcomp: crossval: the test record starts {}{}",
+        report.test.initial_state,
+        match (args.test_start, test_start) {
+            (StartArg::Auto, TestStart::ContinueTraining) =>
+                " (--train and --test are consecutive row ranges of one file; --test-start rest to start from rest)",
+            (StartArg::Auto, TestStart::Rest) =>
+                " (--test-start continue if the test record follows the training record without a gap)",
+            _ => "",
+        }
+    );
     if let Some(path) = &args.predictions {
-        write_predictions(path, &cv, &test, report.test.warmup, c)?;
+        let preceding = (test_start == TestStart::ContinueTraining).then_some(train_record);
+        write_predictions(path, &cv, preceding, &test, report.test.warmup, c)?;
     }
     if ctx.json {
         let output = Output {
@@ -241,10 +320,17 @@ pub fn run(args: &Args, ctx: Context) -> Result<(), CliError> {
     let t = &report.test;
     let f = &t.forward;
     outln!(
-        "validated on {} ({} samples, the first {} left out as warm-up):",
+        "validated on {} ({} samples, the first {} left out as warm-up; {}):",
         args.test.display(),
         t.samples,
-        t.warmup
+        t.warmup,
+        match t.start {
+            TestStart::Rest => "from rest".to_owned(),
+            TestStart::ContinueTraining => format!(
+                "memory carried from the {} training samples",
+                t.preceding_samples
+            ),
+        }
     )?;
     outln!(
         "  forward prediction of the displacement: RMS {:.3} %, max {:.3} % of its range \
@@ -279,7 +365,9 @@ pub fn run(args: &Args, ctx: Context) -> Result<(), CliError> {
     }
     outln!(
         "  offline inverse replay (measured displacement in, voltage out, vs the voltage \
-         applied; % of the test voltage range, limits {} .. {} {}):",
+         applied; % of the test voltage range {} {}, limits {} .. {} {}):",
+        crate::number(t.ranges.voltage),
+        c.voltage_unit,
         crate::number(t.voltage_limits[0]),
         crate::number(t.voltage_limits[1]),
         c.voltage_unit
@@ -322,22 +410,26 @@ pub fn run(args: &Args, ctx: Context) -> Result<(), CliError> {
 }
 
 /// Writes `--predictions`: both models run over the test record as the validation runs them
-/// (from reset, a creep link settled at the record's start).
+/// (through `preceding` first when the memory is carried; a creep link settled at the first
+/// sample run).
 fn write_predictions(
     path: &std::path::Path,
     cv: &hystcomp_identify::CrossValidation,
+    preceding: Option<Record<'_>>,
     test: &super::identify::Loaded,
     warmup: usize,
     c: &ColumnArgs,
 ) -> Result<(), CliError> {
-    let displacement = cv
-        .plant
-        .predict_settled(&test.voltage)
-        .map_err(|e| CliError::input(e.to_string()))?;
-    let drive = cv
-        .inverse
-        .predict_settled(&test.displacement)
-        .map_err(|e| CliError::input(e.to_string()))?;
+    let (displacement, drive) = hystcomp_identify::predict_test(
+        &cv.plant,
+        &cv.inverse,
+        preceding,
+        Record {
+            voltage: &test.voltage,
+            displacement: &test.displacement,
+        },
+    )
+    .map_err(|e| CliError::input(e.to_string()))?;
     let error: Vec<f64> = displacement
         .iter()
         .zip(&test.displacement)
