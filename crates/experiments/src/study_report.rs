@@ -536,7 +536,7 @@ pub fn explanations(study: &Study) -> Vec<TextSection> {
     if !plant_curve.is_empty() {
         paragraphs.push(format!(
             "The particle swarm converges slowly on this problem: its best plant fit is {:.3} % \
-             of the output range after 200 iterations (the usual budget), {:.3} % after 1000 and \
+             of the output range after 200 iterations, {:.3} % after 1000 and \
              {:.3} % after {}; for the inverse model {:.3} %, {:.3} % and {:.3} %. The study \
              gives it {} iterations (the convergence figure shows the whole curve).",
             at(plant_curve, 200),

@@ -1,5 +1,5 @@
 //! Identification of 100 000 samples: least squares with n = 10 and n = 50 play operators, and
-//! the particle swarm (40 particles x 200 iterations) on the same data.
+//! the particle swarm (its defaults, `PsoOptions::default()`) on the same data.
 //!
 //! The record: Table 1 of the paper driven by 50 decaying 1 Hz cycles at 2 kHz (so that every
 //! operator reverses at many amplitudes), 0..10 V -> 0..75 um, plus Gaussian sensor noise of

@@ -75,6 +75,7 @@ mod identification;
 pub mod ls;
 mod options;
 pub mod order;
+pub mod predict;
 pub mod problem;
 pub mod pso;
 mod report;
@@ -87,8 +88,8 @@ pub use chain::{
 };
 pub use chain_crossval::{ChainCrossValidation, crossval_chain};
 pub use crossval::{
-    CrossValidation, CrossvalOptions, CrossvalReport, Record, Replay, Validation, crossval,
-    validate_models,
+    CrossValidation, CrossvalOptions, CrossvalReport, Record, Replay, TestRanges, TestStart,
+    Validation, crossval, predict_test, validate_models, validate_models_from,
 };
 pub use dynamics::{DynamicsFit, DynamicsOptions, Mode, fit_dynamics};
 pub use error::IdentifyError;
@@ -103,13 +104,14 @@ pub use options::{
 pub use order::{
     AUTO_HOLDOUT, AUTO_OPERATOR_CANDIDATES, OrderCandidate, OrderSelection, select_operators,
 };
+pub use predict::{Prediction, predict};
 pub use problem::{
     Constraint, ConstraintKind, DelayedCompensator, FitProblem, HIGHER_DEGREE_GRID,
     MAX_FIT_INPUT_DEGREE, Parameters, ProblemData,
 };
 pub use pso::{
-    CONSTRICTION_ACCELERATION, CONSTRICTION_INERTIA, MAX_ITERATIONS, MAX_PARTICLES, ParticleSwarm,
-    PsoBounds, PsoOptions,
+    CONSTRICTION_ACCELERATION, CONSTRICTION_INERTIA, DEFAULT_ITERATIONS, DEFAULT_PARTICLES,
+    MAX_ITERATIONS, MAX_PARTICLES, ParticleSwarm, PsoBounds, PsoOptions, Topology,
 };
 pub use report::{
     DelayedConstraint, DelayedGains, ErrorStats, FitReport, SampleCounts, SignalRange, WarmupReport,

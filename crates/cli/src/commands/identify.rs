@@ -4,7 +4,7 @@ use std::path::{Path, PathBuf};
 
 use hystcomp_identify::{
     IdentifyError, IdentifyOptions, Method, OutputOffset, PsoBounds, PsoOptions, Thresholds,
-    Warmup, identify_observed,
+    Topology, Warmup, identify_observed,
 };
 use hystcomp_io::data::{self, Column, Delimiter, Header, ReadOptions, RowRange};
 use hystcomp_io::model_file::Direction;
@@ -134,7 +134,7 @@ pub struct FitArgs {
     #[arg(
         long = "pso-particles",
         alias = "particles",
-        default_value_t = 40,
+        default_value_t = hystcomp_identify::DEFAULT_PARTICLES,
         value_name = "N"
     )]
     pub particles: usize,
@@ -142,10 +142,14 @@ pub struct FitArgs {
     #[arg(
         long = "pso-iterations",
         alias = "iterations",
-        default_value_t = 200,
+        default_value_t = hystcomp_identify::DEFAULT_ITERATIONS,
         value_name = "N"
     )]
     pub iterations: usize,
+    /// pso: whom each particle follows: ring (the best of itself and its two neighbours,
+    /// Bratton & Kennedy's standard swarm) or global (the swarm's best, the 1995 swarm).
+    #[arg(long, default_value = "ring", value_name = "ring|global", value_parser = parse_topology)]
+    pub pso_topology: Topology,
     /// pso: inertia weight at the first and last iteration, START,END (linear in between;
     /// default 0.7298 throughout, Clerc & Kennedy's constriction; Shi & Eberhart use 0.9,0.4).
     #[arg(long, value_name = "START,END", value_delimiter = ',')]
@@ -306,6 +310,14 @@ fn parse_offset(text: &str) -> Result<OutputOffset, String> {
             .filter(|v| v.is_finite())
             .map(OutputOffset::Value)
             .ok_or_else(|| format!("expected fit, none or a number, got {text:?}")),
+    }
+}
+
+fn parse_topology(text: &str) -> Result<Topology, String> {
+    match text.trim().to_ascii_lowercase().as_str() {
+        "ring" => Ok(Topology::Ring),
+        "global" => Ok(Topology::Global),
+        _ => Err(format!("expected ring or global, got {text:?}")),
     }
 }
 
@@ -481,13 +493,19 @@ impl FitArgs {
             "--pso-particles",
             self.particles,
             2..=MAX_PARTICLES,
-            "particles (the default is 40)",
+            &format!(
+                "particles (the default is {})",
+                hystcomp_identify::DEFAULT_PARTICLES
+            ),
         )?;
         bounds::count(
             "--pso-iterations",
             self.iterations,
             1..=MAX_ITERATIONS,
-            "iterations (the default is 200)",
+            &format!(
+                "iterations (the default is {})",
+                hystcomp_identify::DEFAULT_ITERATIONS
+            ),
         )
     }
 
@@ -508,6 +526,7 @@ impl FitArgs {
                     .with_velocity_clamp(self.velocity_clamp)?
                     .with_penalty(self.penalty)?
                     .with_seed(self.seed)
+                    .with_topology(self.pso_topology)
                     .with_polish(self.polish);
                 match self.inertia.as_deref() {
                     None => {}
@@ -687,11 +706,13 @@ pub fn print_fit(report: &hystcomp_identify::FitReport) -> Result<(), CliError> 
     )?;
     if let Some(h) = &report.holdout {
         outln!(
-            "  held out: RMS {:.4} % ({:.4} {unit}), max {:.4} % ({:.4} {unit})",
+            "  held out: RMS {:.4} % ({:.4} {unit}), max {:.4} % ({:.4} {unit}) of the held-out \
+             span's own range ({:.4} {unit}, as crossval normalises a test span)",
             h.rms_percent,
             h.rms,
             h.max_percent,
-            h.max
+            h.max,
+            h.range
         )?;
     }
     outln!(

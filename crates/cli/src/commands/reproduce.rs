@@ -35,7 +35,7 @@ pub struct Args {
     #[arg(long, default_value_t = STUDY_PSO_ITERATIONS)]
     pso_iterations: usize,
     /// Particles of the `paper` pipeline's swarm (2 to 1000).
-    #[arg(long, default_value_t = 40)]
+    #[arg(long, default_value_t = hystcomp_identify::DEFAULT_PARTICLES)]
     pso_particles: usize,
     /// Exit with status 0 even when an acceptance check fails (by default such a run writes
     /// everything, then exits with status 5).
