@@ -96,9 +96,9 @@ pub struct HystcompIdentifyOptions {
     pub accept_poor_fit: c_int,
     /// Swarm: the seed of its random numbers (default 0).
     pub seed: u64,
-    /// Swarm: particles, 2 to `HYSTCOMP_MAX_PARTICLES` (default 40).
+    /// Swarm: particles, 2 to `HYSTCOMP_MAX_PARTICLES` (default 50).
     pub particles: usize,
-    /// Swarm: iterations, 1 to `HYSTCOMP_MAX_ITERATIONS` (default 200).
+    /// Swarm: iterations, 1 to `HYSTCOMP_MAX_ITERATIONS` (default 10000).
     pub iterations: usize,
     /// Swarm: non-zero to polish the best particle by least squares.
     pub polish: c_int,
@@ -106,10 +106,26 @@ pub struct HystcompIdentifyOptions {
     pub voltage_unit: *const c_char,
     /// Unit of the displacement samples, written to the model (NULL: `"um"`).
     pub displacement_unit: *const c_char,
+    /// Non-zero: fit a plant model meant for the one-sample-delayed compensators
+    /// (`ihc-delayed`, `wihc-delayed`): both delayed loops' gains, over every number of moving
+    /// operators and every drive in the fitted range, held to at most `delayed_loop_bound`, so
+    /// that neither loop can oscillate (`hystcomp identify --for-delayed`); the report's
+    /// `unconstrained_fit_rms_percent` says what it cost. Inverse models ignore it. Default 0.
+    pub for_delayed: c_int,
+    /// The bound on both delayed loops' gains with `for_delayed`, in `(0, 1)` (default 0.9).
+    pub delayed_loop_bound: f64,
+    /// Non-zero: choose the number of play operators among 5, 10, 15, 20, 30, 40 and 50 by the
+    /// held-out RMS error, as `hystcomp identify -n auto` (each fitted on the record less its
+    /// last `holdout`, or 25 % when `holdout` is 0; the smallest within 1 % of the best);
+    /// `operators` is then ignored and the report's `operators` holds the choice. Ignored when
+    /// `thresholds` is given. Default 0.
+    pub operators_auto: c_int,
 }
 
 /// Errors of a model's prediction over a span of samples (`predicted - measured`), in the
-/// output's unit and in % of the fitted output range.
+/// output's unit and in % of `range`: the fitted output range for the fit, the held-out span's
+/// own output range for the hold-out (as `hystcomp crossval` normalises a test span), the
+/// measured output's range for `hystcomp_predict`.
 #[repr(C)]
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct HystcompErrorStats {
@@ -121,13 +137,13 @@ pub struct HystcompErrorStats {
     pub max: f64,
     /// Mean error (a bias or offset drift).
     pub mean: f64,
-    /// The range the percentages refer to (the fitted output range).
+    /// The range the percentages refer to.
     pub range: f64,
-    /// `rms` in % of the fitted output range.
+    /// `rms` in % of `range`.
     pub rms_percent: f64,
-    /// `max` in % of the fitted output range.
+    /// `max` in % of `range`.
     pub max_percent: f64,
-    /// The RMS of the error minus its mean, in % of the fitted output range.
+    /// The RMS of the error minus its mean, in % of `range`.
     pub std_percent: f64,
 }
 
@@ -170,6 +186,14 @@ pub struct HystcompFitReport {
     pub min_branch_slope: f64,
     /// Wall-clock time of the identification, s.
     pub elapsed_s: f64,
+    /// The number of play operators of the model (the choice with `operators_auto`).
+    pub operators: usize,
+    /// With `for_delayed` (plant models): the bound both delayed loops' gains were held to;
+    /// NaN otherwise.
+    pub delayed_loop_bound: f64,
+    /// With `for_delayed` (plant models): the fit's RMS error without the bound, in % of the
+    /// fitted output range (the bound's cost is `fit.rms_percent` minus this); NaN otherwise.
+    pub unconstrained_fit_rms_percent: f64,
 }
 
 impl From<&ErrorStats> for HystcompErrorStats {
@@ -223,6 +247,11 @@ impl From<&FitReport> for HystcompFitReport {
             violated_constraints: r.violated_constraints,
             min_branch_slope: r.min_branch_slope,
             elapsed_s: r.elapsed_s,
+            operators: r.thresholds.len(),
+            delayed_loop_bound: r.delayed_constraint.map_or(f64::NAN, |c| c.bound),
+            unconstrained_fit_rms_percent: r
+                .delayed_constraint
+                .map_or(f64::NAN, |c| c.unconstrained_fit_rms_percent),
         }
     }
 }
@@ -253,12 +282,16 @@ fn default_options() -> HystcompIdentifyOptions {
         polish: c_int::from(pso.polish),
         voltage_unit: std::ptr::null(),
         displacement_unit: std::ptr::null(),
+        for_delayed: 0,
+        delayed_loop_bound: hystcomp_identify::DEFAULT_DELAYED_LOOP_BOUND,
+        operators_auto: 0,
     }
 }
 
 /// Fills `*options` with the defaults: a plant model, least squares, 10 operators, automatic
 /// warm-up, no hold-out, a fitted output offset, margin 0.001, poor fits refused, the swarm's
-/// 40 particles x 200 iterations from seed 0, units V and um.
+/// 50 particles on a ring x 10000 iterations from seed 0, units V and um, no delayed-loop
+/// bound (`for_delayed` 0, bound 0.9), `operators` as given (`operators_auto` 0).
 ///
 /// Fails with `NULL_POINTER`.
 ///
@@ -355,6 +388,7 @@ unsafe fn library_options(o: &HystcompIdentifyOptions) -> Result<IdentifyOptions
         } else {
             library.max_fit_rms_percent
         },
+        delayed_loop_bound: (o.for_delayed != 0).then_some(o.delayed_loop_bound),
         voltage_unit: unit(o.voltage_unit, "voltage_unit", "V")?,
         displacement_unit: unit(o.displacement_unit, "displacement_unit", "um")?,
         ..library
@@ -371,7 +405,9 @@ unsafe fn library_options(o: &HystcompIdentifyOptions) -> Result<IdentifyOptions
 /// - `voltage`, `voltage_len`, `displacement`, `displacement_len`: the record, one pair per
 ///   sample: equal lengths, not empty, finite, not constant. The model's input is the voltage
 ///   for a plant model and the displacement for an inverse one.
-/// - `options`: NULL for the defaults (`hystcomp_identify_options_default`).
+/// - `options`: NULL for the defaults (`hystcomp_identify_options_default`); with
+///   `for_delayed` both delayed loops' gains are bounded, with `operators_auto` the number of
+///   play operators is chosen by held-out error.
 /// - `out`: receives the model (NULL on failure); its `identification_json` holds the whole fit
 ///   report. Free it with `hystcomp_model_free`.
 /// - `report`: receives the fit report's numbers, or NULL when not wanted.
@@ -414,7 +450,16 @@ pub unsafe extern "C" fn hystcomp_identify(
             .copied()
             .unwrap_or_else(default_options);
         // SAFETY: the struct's pointers are valid as documented (the caller's contract).
-        let options = unsafe { library_options(&given) }?;
+        let mut options = unsafe { library_options(&given) }?;
+        if given.operators_auto != 0 && given.thresholds.is_null() {
+            let selection = hystcomp_identify::select_operators(
+                voltage,
+                displacement,
+                &options,
+                &hystcomp_identify::AUTO_OPERATOR_CANDIDATES,
+            )?;
+            options.thresholds = Thresholds::Uniform(selection.operators);
+        }
         let identification = hystcomp_identify::identify(voltage, displacement, &options)?;
         if !report.is_null() {
             // SAFETY: non-NULL, valid for a write (the caller's contract).
@@ -422,6 +467,91 @@ pub unsafe extern "C" fn hystcomp_identify(
         }
         // SAFETY: `out` was checked non-NULL by `clear_out` and is valid for a write.
         unsafe { put_handle(out, HystcompModel::new(identification.model)) };
+        Ok(())
+    })
+}
+
+/// What `hystcomp_predict` found besides the per-sample values.
+#[repr(C)]
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct HystcompPrediction {
+    /// The errors over every sample (`predicted - measured`), in the model's output unit and in
+    /// % of the measured output's range over the record.
+    pub error: HystcompErrorStats,
+    /// Samples whose input lies outside the range the model was identified on (it
+    /// extrapolates there).
+    pub outside_input_range: usize,
+}
+
+/// A model's prediction of a record, as `hystcomp predict` does: the model runs from its reset
+/// state (zero operator memory, eq. (1); with `settled` non-zero a creep link taken as having
+/// rested long at the first sample) over its input, a plant model over `voltage`, an inverse
+/// model over `displacement`, and is compared with the other signal.
+///
+/// - `voltage`, `displacement`: the record, `len` samples each, finite;
+/// - `predicted`, `error`: receive the predicted output and `predicted - measured`, `len`
+///   doubles each (either may be NULL when not wanted);
+/// - `summary`: receives the errors' statistics and the count of inputs outside the model's
+///   range (or NULL).
+///
+/// Fails with `NULL_POINTER` or `INVALID_ARGUMENT` (`len` 0, a NaN or infinite sample, a
+/// prediction that is not finite: the message names the sample); nothing is written then.
+///
+/// # Safety
+/// `model` must be a live model handle or NULL; `voltage` and `displacement` must point to
+/// `len` readable doubles (or be NULL); `predicted` and `error` to `len` writable doubles (or
+/// be NULL); `summary` be valid for one write (or NULL).
+#[unsafe(no_mangle)]
+#[allow(clippy::too_many_arguments)]
+pub unsafe extern "C" fn hystcomp_predict(
+    model: *const HystcompModel,
+    voltage: *const f64,
+    displacement: *const f64,
+    len: usize,
+    settled: c_int,
+    predicted: *mut f64,
+    error: *mut f64,
+    summary: *mut HystcompPrediction,
+) -> c_int {
+    boundary(|| {
+        // SAFETY: a live handle or NULL (the caller's contract).
+        let model = unsafe { crate::model::model_arg(model) }?;
+        // SAFETY: `len` doubles or NULL (the caller's contract).
+        let voltage = unsafe { signal(voltage, len, "voltage") }?;
+        // SAFETY: `len` doubles or NULL (the caller's contract).
+        let displacement = unsafe { signal(displacement, len, "displacement") }?;
+        for (ptr, what) in [(predicted, "predicted"), (error, "error")] {
+            if !ptr.is_null() {
+                crate::args::check_array(ptr, len, what)?;
+            }
+        }
+        let prediction = hystcomp_identify::predict(
+            &model.file,
+            hystcomp_identify::Record {
+                voltage,
+                displacement,
+            },
+            settled != 0,
+        )?;
+        for (ptr, values) in [
+            (predicted, &prediction.predicted),
+            (error, &prediction.error),
+        ] {
+            if !ptr.is_null() {
+                // SAFETY: `ptr` is valid for `len == values.len()` writes (the caller's
+                // contract), non-NULL and aligned (checked).
+                unsafe { std::ptr::copy_nonoverlapping(values.as_ptr(), ptr, values.len()) };
+            }
+        }
+        if !summary.is_null() {
+            // SAFETY: non-NULL, valid for a write (the caller's contract).
+            unsafe {
+                summary.write(HystcompPrediction {
+                    error: (&prediction.stats).into(),
+                    outside_input_range: prediction.outside_input_range,
+                })
+            };
+        }
         Ok(())
     })
 }

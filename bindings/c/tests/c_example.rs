@@ -128,6 +128,23 @@ fn c_program_identifies_saves_loads_compensates_and_scores() {
     assert!(dir.path().join("identified.json").is_file());
 }
 
+/// Issue 10 in C: `for_delayed` (the bound, its cost, the delayed WIHC then built),
+/// `operators_auto` (the choice in the report) and `hystcomp_predict` (per-sample prediction and
+/// error, the summary, refusals that write nothing).
+#[test]
+fn c_program_identifies_for_delayed_with_auto_order_and_predicts() {
+    let program = compile(
+        "bindings/c/tests/c/delayed_auto_predict.c",
+        "delayed_auto_predict",
+    );
+    let output = run(
+        &mut Command::new(program),
+        "bindings/c/tests/c/delayed_auto_predict.c must pass its own checks",
+    );
+    let stdout = String::from_utf8_lossy(&output.stdout);
+    assert!(stdout.starts_with("delayed_auto_predict OK: "), "{stdout}");
+}
+
 #[test]
 fn c_program_learns_between_trials_and_is_stopped_by_the_guard() {
     let program = compile("bindings/c/tests/c/learner.c", "learner");
@@ -320,6 +337,10 @@ fn c_programs_run_clean_under_valgrind() {
     let dir = tempfile::tempdir().expect("a temporary directory");
     let models = compile("bindings/c/tests/c/models.c", "models");
     let learner = compile("bindings/c/tests/c/learner.c", "learner");
+    let delayed_auto_predict = compile(
+        "bindings/c/tests/c/delayed_auto_predict.c",
+        "delayed_auto_predict",
+    );
     let runs: Vec<(&PathBuf, Vec<std::ffi::OsString>, i32)> = vec![
         (
             round_trip_program(),
@@ -334,6 +355,7 @@ fn c_programs_run_clean_under_valgrind() {
         (round_trip_program(), vec![], 2),
         (&models, vec![dir.path().into()], 0),
         (&learner, vec!["models/table1-plant.json".into()], 0),
+        (&delayed_auto_predict, vec![], 0),
     ];
     for (program, args, code) in runs {
         let output = Command::new("valgrind")

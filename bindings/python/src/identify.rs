@@ -1,12 +1,12 @@
 //! `identify(...)`: `hystcomp_identify::identify` with Python keyword arguments.
 
 use hystcomp_identify::{
-    Identification as RustIdentification, IdentifyOptions, Method, OutputOffset, PsoOptions,
-    Thresholds, Warmup,
+    Identification as RustIdentification, IdentifyOptions, Method, OrderSelection, OutputOffset,
+    PsoOptions, Thresholds, Warmup,
 };
 use pyo3::prelude::*;
 
-use crate::arrays::{ArrayIn, values};
+use crate::arrays::{ArrayIn, array_out, record_values, values};
 use crate::errors::{self, invalid};
 use crate::model::{ModelFile, parse_direction, to_python, typed};
 
@@ -15,6 +15,15 @@ use crate::model::{ModelFile, parse_direction, to_python, typed};
 pub enum WarmupArg {
     /// A number of samples.
     Samples(usize),
+    /// `"auto"`.
+    Name(String),
+}
+
+/// A number of play operators, or `"auto"`.
+#[derive(FromPyObject)]
+pub enum OperatorsArg {
+    /// This many.
+    Count(usize),
     /// `"auto"`.
     Name(String),
 }
@@ -35,6 +44,7 @@ pub enum OffsetArg {
 #[pyclass(module = "hystcomp", name = "Identification", frozen)]
 pub struct Identification {
     inner: RustIdentification,
+    selection: Option<OrderSelection>,
 }
 
 #[pymethods]
@@ -59,6 +69,18 @@ impl Identification {
         to_python(py, &self.inner.parameters)
     }
 
+    /// With ``n="auto"``: how the number of play operators was chosen, a dict with
+    /// ``operators`` (the choice), ``holdout`` (the fraction of the record held out to choose
+    /// it) and ``candidates`` (each tried: ``operators``, ``fit_rms_percent``,
+    /// ``holdout_rms_percent``); ``None`` when ``n`` was given.
+    #[getter]
+    fn order_selection<'py>(&self, py: Python<'py>) -> PyResult<Option<Bound<'py, PyAny>>> {
+        self.selection
+            .as_ref()
+            .map(|s| to_python(py, s))
+            .transpose()
+    }
+
     fn __repr__(&self) -> String {
         let r = &self.inner.report;
         format!(
@@ -77,7 +99,10 @@ impl Identification {
 /// and measured displacements (equal lengths, finite), as ``hystcomp identify`` does.
 ///
 /// - ``n``: play operators at thresholds ``(i - 1)/n`` of the input range (eq. (11)), unless
-///   ``thresholds`` gives them (fractions of the input range in ``[0, 1)``, increasing);
+///   ``thresholds`` gives them (fractions of the input range in ``[0, 1)``, increasing); or
+///   ``"auto"``: the one of 5, 10, 15, 20, 30, 40, 50 whose model predicts the last
+///   ``holdout`` of the record (25 % when ``holdout`` is 0) best, fitted on the rest, as
+///   ``hystcomp identify -n auto`` (``.order_selection`` says which and why);
 /// - ``method``: ``"ls"`` (constrained least squares, the global optimum) or ``"pso"``
 ///   (particle swarm, as the paper; ``seed``, ``particles``, ``iterations``, ``polish``);
 /// - ``direction``: ``"plant"`` (voltage to displacement, for IHC and WIHC) or ``"inverse"``
@@ -92,19 +117,25 @@ impl Identification {
 ///   physical output offset;
 /// - ``margin``: the smallest branch slope the model must keep (normalised);
 /// - ``accept_poor_fit``: return the model even when its RMS fit error exceeds the 10 % of the
-///   output range a usable hysteresis model stays under (by default ``IdentificationError``).
+///   output range a usable hysteresis model stays under (by default ``IdentificationError``);
+/// - ``for_delayed``: a plant model meant for the one-sample-delayed compensators
+///   (``ihc-delayed``, ``wihc-delayed``): both delayed loops' gains, over every number of
+///   moving operators and every drive in the fitted range, held to at most
+///   ``delayed_loop_bound`` (in ``(0, 1)``), so that neither loop can oscillate, as ``hystcomp
+///   identify --for-delayed``; the report's ``delayed_constraint`` says what it cost in fit
+///   RMS. Inverse models ignore it.
 ///
 /// Releases the GIL while it runs. Raises ``InvalidValueError`` for unusable samples or
 /// options and ``IdentificationError`` when no model can be identified (the message says what
 /// to change).
 #[pyfunction]
-#[pyo3(signature = (voltage, displacement, n = 10, method = "ls", direction = "plant", *, seed = 0, thresholds = None, warmup = WarmupArg::Name("auto".into()), holdout = 0.2, offset = OffsetArg::Name("fit".into()), margin = hystcomp_identify::DEFAULT_MARGIN, particles = 40, iterations = 200, polish = false, accept_poor_fit = false, voltage_unit = "V", displacement_unit = "um"))]
+#[pyo3(signature = (voltage, displacement, n = 10, method = "ls", direction = "plant", *, seed = 0, thresholds = None, warmup = WarmupArg::Name("auto".into()), holdout = 0.2, offset = OffsetArg::Name("fit".into()), margin = hystcomp_identify::DEFAULT_MARGIN, particles = hystcomp_identify::DEFAULT_PARTICLES, iterations = hystcomp_identify::DEFAULT_ITERATIONS, polish = false, accept_poor_fit = false, voltage_unit = "V", displacement_unit = "um", for_delayed = false, delayed_loop_bound = hystcomp_identify::DEFAULT_DELAYED_LOOP_BOUND))]
 #[allow(clippy::too_many_arguments)]
 pub fn identify(
     py: Python<'_>,
     voltage: ArrayIn<'_>,
     displacement: ArrayIn<'_>,
-    n: usize,
+    n: OperatorsArg,
     method: &str,
     direction: &str,
     seed: u64,
@@ -119,7 +150,22 @@ pub fn identify(
     accept_poor_fit: bool,
     voltage_unit: &str,
     displacement_unit: &str,
+    for_delayed: bool,
+    delayed_loop_bound: f64,
 ) -> PyResult<Identification> {
+    let auto = match n {
+        OperatorsArg::Count(_) => false,
+        OperatorsArg::Name(ref name) if name.trim().eq_ignore_ascii_case("auto") => true,
+        OperatorsArg::Name(name) => {
+            return Err(invalid(format!(
+                "n {name:?} is unknown; give a number of play operators or \"auto\""
+            )));
+        }
+    };
+    let n = match n {
+        OperatorsArg::Count(n) => n,
+        OperatorsArg::Name(_) => hystcomp_identify::DEFAULT_OPERATORS,
+    };
     let method = match method.trim().to_ascii_lowercase().as_str() {
         "ls" | "least-squares" | "least_squares" => Method::LeastSquares,
         "pso" | "particle-swarm" | "particle_swarm" => Method::ParticleSwarm(
@@ -174,14 +220,132 @@ pub fn identify(
         } else {
             IdentifyOptions::default().max_fit_rms_percent
         },
+        delayed_loop_bound: for_delayed.then_some(delayed_loop_bound),
         voltage_unit: voltage_unit.to_string(),
         displacement_unit: displacement_unit.to_string(),
         ..IdentifyOptions::default()
     };
+    let auto = auto && matches!(options.thresholds, Thresholds::Uniform(_));
     let voltage = values(voltage);
     let displacement = values(displacement);
-    let result = py.detach(|| hystcomp_identify::identify(&voltage, &displacement, &options));
-    Ok(Identification {
+    let result = py.detach(|| -> Result<_, hystcomp_identify::IdentifyError> {
+        options.validate()?;
+        if !auto {
+            return hystcomp_identify::identify(&voltage, &displacement, &options)
+                .map(|fit| (fit, None));
+        }
+        let selection = hystcomp_identify::select_operators(
+            &voltage,
+            &displacement,
+            &options,
+            &hystcomp_identify::AUTO_OPERATOR_CANDIDATES,
+        )?;
+        let chosen = IdentifyOptions {
+            thresholds: Thresholds::Uniform(selection.operators),
+            ..options
+        };
+        hystcomp_identify::identify(&voltage, &displacement, &chosen)
+            .map(|fit| (fit, Some(selection)))
+    });
+    let (inner, selection) = result.map_err(errors::identify)?;
+    Ok(Identification { inner, selection })
+}
+
+/// A model's prediction of a record (``hystcomp predict``): ``.predicted`` and ``.error``
+/// (predicted minus measured; numpy arrays, one per sample, in the model's output unit),
+/// ``.stats`` (an ``ErrorStats``: RMS, max, mean, in the unit and in % of the measured
+/// output's range ``.stats.range``), ``.outside_input_range`` (samples the model
+/// extrapolates), ``.initial_state`` and ``.direction``.
+#[pyclass(module = "hystcomp", name = "Prediction", frozen)]
+pub struct Prediction {
+    inner: hystcomp_identify::Prediction,
+}
+
+#[pymethods]
+impl Prediction {
+    /// The predicted output: the displacement for a plant model, the voltage for an inverse
+    /// one.
+    #[getter]
+    fn predicted<'py>(&self, py: Python<'py>) -> Bound<'py, numpy::PyArray1<f64>> {
+        array_out(py, self.inner.predicted.clone())
+    }
+
+    /// Predicted minus measured, one per sample.
+    #[getter]
+    fn error<'py>(&self, py: Python<'py>) -> Bound<'py, numpy::PyArray1<f64>> {
+        array_out(py, self.inner.error.clone())
+    }
+
+    /// The errors over every sample, an ``ErrorStats`` (``rms_percent`` is in % of the measured
+    /// output's range over the record, ``range``).
+    #[getter]
+    fn stats<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        typed(py, "ErrorStats", to_python(py, &self.inner.stats)?)
+    }
+
+    /// Samples whose input lies outside the range the model was identified on.
+    #[getter]
+    fn outside_input_range(&self) -> usize {
+        self.inner.outside_input_range
+    }
+
+    /// How the model started (its reset state, eq. (1); a creep link settled with
+    /// ``settled=True``).
+    #[getter]
+    fn initial_state(&self) -> String {
+        self.inner.initial_state.clone()
+    }
+
+    /// ``"plant"`` or ``"inverse"``.
+    #[getter]
+    fn direction(&self) -> String {
+        self.inner.direction.to_string()
+    }
+
+    fn __len__(&self) -> usize {
+        self.inner.predicted.len()
+    }
+
+    fn __repr__(&self) -> String {
+        format!(
+            "Prediction(direction={:?}, samples={}, rms_percent={:.4})",
+            self.inner.direction.to_string(),
+            self.inner.predicted.len(),
+            self.inner.stats.rms_percent
+        )
+    }
+}
+
+/// Runs ``model`` (a ``ModelFile``) over a record from its reset state (zero operator memory,
+/// eq. (1)), as ``hystcomp predict`` does: a plant model over ``voltage``, compared with
+/// ``displacement``; an inverse model the other way round (equal lengths, finite, not empty).
+/// ``settled``: a creep link taken as having rested long at the first sample. Returns a
+/// ``Prediction``. Raises ``InvalidValueError`` for unusable samples or a prediction that is
+/// not finite (naming the sample). Releases the GIL while it runs.
+#[pyfunction]
+#[pyo3(signature = (model, voltage, displacement, *, settled = false))]
+pub fn predict(
+    py: Python<'_>,
+    model: PyRef<'_, ModelFile>,
+    voltage: ArrayIn<'_>,
+    displacement: ArrayIn<'_>,
+    settled: bool,
+) -> PyResult<Prediction> {
+    let voltage = record_values(voltage, "voltage")?;
+    let displacement = record_values(displacement, "displacement")?;
+    let file = model.inner.clone();
+    drop(model);
+    let result = py.detach(|| {
+        hystcomp_identify::predict(
+            &file,
+            hystcomp_identify::Record {
+                voltage: &voltage,
+                displacement: &displacement,
+            },
+            settled,
+        )
+    });
+    Ok(Prediction {
         inner: result.map_err(errors::identify)?,
     })
 }

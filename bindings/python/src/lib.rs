@@ -8,7 +8,7 @@
 //! - `compensator`: `Compensator` (hystcomp-io's `ScaledCompensator`: IHC, WIHC, DIHC in
 //!   physical units);
 //! - `bank`: `CompensatorBank` (hystcomp-io's `ScaledBank`: many channels stepped together);
-//! - `identify`: `identify(...)` (hystcomp-identify);
+//! - `identify`: `identify(...)` and `predict(...)` (hystcomp-identify);
 //! - `stage`: `Stage`, `StageResponse` (hystcomp-stage);
 //! - `indices`: `e_m`, `e_rms`, `e_mhe`, `tracking_indices` (hystcomp-experiments);
 //! - `study`: `reproduce(...)` (hystcomp-experiments' study);
@@ -44,12 +44,14 @@ fn _hystcomp(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<compensator::Compensator>()?;
     m.add_class::<bank::CompensatorBank>()?;
     m.add_class::<identify::Identification>()?;
+    m.add_class::<identify::Prediction>()?;
     m.add_class::<stage::Stage>()?;
     m.add_class::<stage::StageResponse>()?;
     m.add_class::<indices::TrackingIndices>()?;
     m.add_class::<study::StudyResult>()?;
     m.add_class::<learn::Learner>()?;
     m.add_function(wrap_pyfunction!(identify::identify, m)?)?;
+    m.add_function(wrap_pyfunction!(identify::predict, m)?)?;
     m.add_function(wrap_pyfunction!(indices::e_m, m)?)?;
     m.add_function(wrap_pyfunction!(indices::e_rms, m)?)?;
     m.add_function(wrap_pyfunction!(indices::e_mhe, m)?)?;

@@ -109,3 +109,71 @@ def test_real_micromanipulator_data_give_a_good_invertible_model():
     assert fit.model.model().check_invertible() > 0
     volts = hystcomp.Ihc(fit.model).process(np.linspace(-115, -80, 400))
     assert 0.0 <= volts.min() and volts.max() <= 3.6
+
+
+def test_for_delayed_bounds_both_delayed_loops_and_says_what_it_cost():
+    volts, um = table1_record()
+    free = hystcomp.identify(volts, um, holdout=0.0)
+    # Table 1's delayed WIHC rings (gain 1.66): the free fit keeps it.
+    assert free.report.delayed_loop_gains["wihc"] > 1.0
+    assert free.report.delayed_constraint is None
+    bounded = hystcomp.identify(volts, um, holdout=0.0, for_delayed=True, delayed_loop_bound=0.8)
+    gains = bounded.report.delayed_loop_gains
+    assert max(gains["ihc"], gains["wihc"]) <= 0.8 + 1e-9
+    cost = bounded.report.delayed_constraint
+    assert cost["bound"] == 0.8
+    assert cost["unconstrained_fit_rms_percent"] == pytest.approx(free.report.fit.rms_percent, abs=1e-9)
+    assert cost["unconstrained_gains"]["wihc"] == pytest.approx(free.report.delayed_loop_gains["wihc"])
+    assert bounded.report.fit.rms_percent >= free.report.fit.rms_percent - 1e-12
+    # The plain delayed WIHC is refused on the free model and builds on the bounded one.
+    with pytest.raises(hystcomp.UnstableDelayError):
+        hystcomp.Compensator(free.model, "wihc-delayed", limits=(0.0, 10.0))
+    hystcomp.Compensator(bounded.model, "wihc-delayed", limits=(0.0, 10.0))
+    # Inverse models have no delayed loop: the option changes nothing there.
+    inverse = hystcomp.identify(volts, um, direction="inverse", for_delayed=True)
+    assert inverse.report.delayed_constraint is None
+    with pytest.raises(hystcomp.InvalidValueError, match="delayed"):
+        hystcomp.identify(volts, um, for_delayed=True, delayed_loop_bound=1.5)
+
+
+def test_n_auto_chooses_by_held_out_error_and_says_why():
+    volts, um = table1_record()
+    fit = hystcomp.identify(volts, um, n="auto", holdout=0.25)
+    selection = fit.order_selection
+    tried = {c["operators"]: c["holdout_rms_percent"] for c in selection["candidates"]}
+    assert set(tried) <= {5, 10, 15, 20, 30, 40, 50} and len(tried) >= 3
+    assert selection["holdout"] == 0.25
+    best = min(tried.values())
+    # The smallest n within 1 % of the best held-out error, and the model has it.
+    assert selection["operators"] == min(n for n, e in tried.items() if e <= best * 1.01)
+    assert len(fit.model.thresholds) == selection["operators"]
+    assert hystcomp.identify(volts, um, n=10).order_selection is None
+    with pytest.raises(hystcomp.InvalidValueError, match="auto"):
+        hystcomp.identify(volts, um, n="many")
+
+
+def test_predict_gives_the_models_prediction_and_error_per_sample(table1, table2):
+    volts, um = table1_record()
+    um = um + 0.01 * np.sin(np.arange(len(um)))
+    p = hystcomp.predict(table1, volts, um)
+    assert isinstance(p, hystcomp.Prediction) and len(p) == len(volts)
+    assert p.direction == "plant" and "reset" in p.initial_state
+    np.testing.assert_array_equal(p.predicted, table1.predict(volts))
+    np.testing.assert_allclose(p.error, p.predicted - um, rtol=0, atol=0)
+    rms = np.sqrt(np.mean(p.error**2))
+    assert p.stats.range == pytest.approx(um.max() - um.min())
+    assert p.stats.rms_percent == pytest.approx(100 * rms / (um.max() - um.min()), rel=1e-12)
+    assert p.outside_input_range == 0
+    # An inverse model predicts the voltage from the displacement.
+    q = hystcomp.predict(table2, volts, um)
+    assert q.direction == "inverse"
+    np.testing.assert_array_equal(q.predicted, table2.predict(um))
+    np.testing.assert_array_equal(q.error, q.predicted - volts)
+    # Inputs beyond the identified range are counted; bad records refused with the reason.
+    assert hystcomp.predict(table1, volts * 1.5, um).outside_input_range > 0
+    with pytest.raises(hystcomp.InvalidValueError, match="length|samples"):
+        hystcomp.predict(table1, volts[:10], um)
+    bad = um.copy()
+    bad[3] = np.nan
+    with pytest.raises(hystcomp.InvalidValueError, match="displacement"):
+        hystcomp.predict(table1, volts, bad)

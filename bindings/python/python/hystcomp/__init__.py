@@ -70,6 +70,7 @@ from ._hystcomp import (
     Learner,
     ModelFile,
     Mpim,
+    Prediction,
     Scale,
     Stage,
     StageResponse,
@@ -81,6 +82,7 @@ from ._hystcomp import (
     e_rms,
     identify,
     paper_trajectory,
+    predict,
     reproduce,
     tracking_indices,
 )
@@ -117,6 +119,7 @@ __all__ = [
     "ModelFileError",
     "Mpim",
     "NotInvertibleError",
+    "Prediction",
     "Scale",
     "Stage",
     "StageConfigError",
@@ -132,6 +135,7 @@ __all__ = [
     "e_rms",
     "identify",
     "paper_trajectory",
+    "predict",
     "reproduce",
     "tracking_indices",
 ]

@@ -12,7 +12,7 @@ from typing import Any, Dict, Iterator, List, Optional, Sequence, Tuple, Union
 import numpy as np
 import numpy.typing as npt
 
-from ._reports import Clamps, Diagnostics, FitReport, LearningLaw, LearningUpdate, StudySummary
+from ._reports import Clamps, Diagnostics, ErrorStats, FitReport, LearningLaw, LearningUpdate, StudySummary
 
 ArrayLike = Union[npt.ArrayLike, Sequence[float]]
 FloatArray = npt.NDArray[np.float64]
@@ -353,11 +353,14 @@ class Identification:
     @property
     def parameters(self) -> Dict[str, Any]:
         """The normalised parameters, as a dict."""
+    @property
+    def order_selection(self) -> Optional[Dict[str, Any]]:
+        """x"""
 
 def identify(
     voltage: ArrayLike,
     displacement: ArrayLike,
-    n: int = 10,
+    n: Union[int, str] = 10,
     method: str = "ls",
     direction: str = "plant",
     *,
@@ -367,12 +370,14 @@ def identify(
     holdout: float = 0.2,
     offset: Union[str, float] = "fit",
     margin: float = 0.001,
-    particles: int = 40,
-    iterations: int = 200,
+    particles: int = 50,
+    iterations: int = 10000,
     polish: bool = False,
     accept_poor_fit: bool = False,
     voltage_unit: str = "V",
     displacement_unit: str = "um",
+    for_delayed: bool = False,
+    delayed_loop_bound: float = 0.9,
 ) -> Identification:
     """Identifies a modified Prandtl-Ishlinskii model (eq. (4)) from a record of drive voltages
     and measured displacements (equal lengths, finite), as ``hystcomp identify`` does.
@@ -395,6 +400,38 @@ def identify(
     Releases the GIL while it runs. Raises ``InvalidValueError`` for unusable samples or
     options and ``IdentificationError`` when no model can be identified (the message says what
     to change)."""
+
+class Prediction:
+    """x"""
+
+    @property
+    def predicted(self) -> FloatArray:
+        """x"""
+    @property
+    def error(self) -> FloatArray:
+        """x"""
+    @property
+    def stats(self) -> ErrorStats:
+        """x"""
+    @property
+    def outside_input_range(self) -> int:
+        """x"""
+    @property
+    def initial_state(self) -> str:
+        """x"""
+    @property
+    def direction(self) -> str:
+        """x"""
+    def __len__(self) -> int: ...
+
+def predict(
+    model: ModelFile,
+    voltage: ArrayLike,
+    displacement: ArrayLike,
+    *,
+    settled: bool = False,
+) -> Prediction:
+    """x"""
 
 class Stage:
     """A simulated piezo nanopositioning stage (DAC, amplifier, hysteresis, creep, resonance,

@@ -133,6 +133,11 @@ class FitReport(_Report):
     #: can ring, and the plain delayed methods are refused unless allowed). ``None`` for
     #: inverse models.
     delayed_loop_gains: Optional[Dict[str, float]] = None
+    #: With ``for_delayed=True`` (plant models): ``{"bound": ..., "unconstrained_fit_rms_percent":
+    #: ..., "unconstrained_gains": {"ihc": ..., "wihc": ...}}``, the bound both delayed loops'
+    #: gains were held to and what it cost: the fit RMS without it and its gains. ``None``
+    #: otherwise.
+    delayed_constraint: Optional[Dict[str, Any]] = None
     extra: Dict[str, Any] = field(default_factory=dict)
 
 

@@ -53,7 +53,7 @@ struct Report {
     /// The model started from its reset state (zero operator memory, eq. (1)) at the first
     /// sample: the first samples before the input has reached both ends of its range depend on
     /// the record's history, which the model does not know.
-    initial_state: &'static str,
+    initial_state: String,
     /// Samples whose input lies outside the range the model was identified on.
     outside_input_range: usize,
     /// Errors over every sample, in the output's unit and % of the measured output's range.
@@ -92,38 +92,28 @@ pub fn run(args: &Args, ctx: Context) -> Result<(), CliError> {
             .context(args.model.display()));
         }
     }
-    let predicted = if args.settled {
-        model.predict_settled(input)
-    } else {
-        model.predict(input)
-    }
-    .map_err(|e| CliError::input(e.to_string()).context(args.model.display()))?;
-    if let Some(k) = predicted.iter().position(|v| !v.is_finite()) {
-        return Err(CliError::input(format!(
-            "{}, sample {} (input {}): the model's prediction is not finite",
+    let prediction = hystcomp_identify::predict(
+        &model,
+        hystcomp_identify::Record {
+            voltage: &loaded.voltage,
+            displacement: &loaded.displacement,
+        },
+        args.settled,
+    )
+    .map_err(|e| {
+        CliError::input(e.to_string()).context(format!(
+            "{} through {}",
             args.data.display(),
-            k + 1,
-            input[k]
+            args.model.display()
         ))
-        .context(args.model.display()));
-    }
-    let error: Vec<f64> = predicted.iter().zip(measured).map(|(p, m)| p - m).collect();
-    let (lo, hi) = measured
-        .iter()
-        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &v| {
-            (a.min(v), b.max(v))
-        });
-    let stats = ErrorStats::new(&predicted, measured, hi - lo)
-        .ok_or_else(|| CliError::input("the record has no samples").context(args.data.display()))?;
+    })?;
+    let stats = prediction.stats;
+    let outside = prediction.outside_input_range;
     let (in_lo, in_hi) = (
         model.input.to_physical(model.input_range[0]),
         model.input.to_physical(model.input_range[1]),
     );
     let (in_lo, in_hi) = (in_lo.min(in_hi), in_lo.max(in_hi));
-    let outside = input
-        .iter()
-        .filter(|&&v| v < in_lo - 1e-9 * (in_hi - in_lo) || v > in_hi + 1e-9 * (in_hi - in_lo))
-        .count();
 
     let (input_name, measured_name) = match model.direction {
         Direction::Plant => ("drive", "measured"),
@@ -153,7 +143,13 @@ pub fn run(args: &Args, ctx: Context) -> Result<(), CliError> {
     data::write_csv(
         &args.output,
         &header,
-        &[time, input, measured, &predicted, &error],
+        &[
+            time,
+            input,
+            measured,
+            &prediction.predicted,
+            &prediction.error,
+        ],
     )
     .map_err(|e| CliError::output(e.to_string()))?;
 
@@ -163,11 +159,7 @@ pub fn run(args: &Args, ctx: Context) -> Result<(), CliError> {
         output: args.output.display().to_string(),
         direction: model.direction,
         samples: input.len(),
-        initial_state: if args.settled {
-            "reset operators, creep settled at the first sample"
-        } else {
-            "reset (zero operator memory, eq. (1))"
-        },
+        initial_state: prediction.initial_state.clone(),
         outside_input_range: outside,
         error: stats,
     };
