@@ -365,11 +365,11 @@ typedef struct HystcompIdentifyOptions {
      */
     uint64_t seed;
     /**
-     * Swarm: particles, 2 to `HYSTCOMP_MAX_PARTICLES` (default 40).
+     * Swarm: particles, 2 to `HYSTCOMP_MAX_PARTICLES` (default 50).
      */
     size_t particles;
     /**
-     * Swarm: iterations, 1 to `HYSTCOMP_MAX_ITERATIONS` (default 200).
+     * Swarm: iterations, 1 to `HYSTCOMP_MAX_ITERATIONS` (default 10000).
      */
     size_t iterations;
     /**
@@ -384,11 +384,33 @@ typedef struct HystcompIdentifyOptions {
      * Unit of the displacement samples, written to the model (NULL: `"um"`).
      */
     const char *displacement_unit;
+    /**
+     * Non-zero: fit a plant model meant for the one-sample-delayed compensators
+     * (`ihc-delayed`, `wihc-delayed`): both delayed loops' gains, over every number of moving
+     * operators and every drive in the fitted range, held to at most `delayed_loop_bound`, so
+     * that neither loop can oscillate (`hystcomp identify --for-delayed`); the report's
+     * `unconstrained_fit_rms_percent` says what it cost. Inverse models ignore it. Default 0.
+     */
+    int for_delayed;
+    /**
+     * The bound on both delayed loops' gains with `for_delayed`, in `(0, 1)` (default 0.9).
+     */
+    double delayed_loop_bound;
+    /**
+     * Non-zero: choose the number of play operators among 5, 10, 15, 20, 30, 40 and 50 by the
+     * held-out RMS error, as `hystcomp identify -n auto` (each fitted on the record less its
+     * last `holdout`, or 25 % when `holdout` is 0; the smallest within 1 % of the best);
+     * `operators` is then ignored and the report's `operators` holds the choice. Ignored when
+     * `thresholds` is given. Default 0.
+     */
+    int operators_auto;
 } HystcompIdentifyOptions;
 
 /**
  * Errors of a model's prediction over a span of samples (`predicted - measured`), in the
- * output's unit and in % of the fitted output range.
+ * output's unit and in % of `range`: the fitted output range for the fit, the held-out span's
+ * own output range for the hold-out (as `hystcomp crossval` normalises a test span), the
+ * measured output's range for `hystcomp_predict`.
  */
 typedef struct HystcompErrorStats {
     /**
@@ -408,19 +430,19 @@ typedef struct HystcompErrorStats {
      */
     double mean;
     /**
-     * The range the percentages refer to (the fitted output range).
+     * The range the percentages refer to.
      */
     double range;
     /**
-     * `rms` in % of the fitted output range.
+     * `rms` in % of `range`.
      */
     double rms_percent;
     /**
-     * `max` in % of the fitted output range.
+     * `max` in % of `range`.
      */
     double max_percent;
     /**
-     * The RMS of the error minus its mean, in % of the fitted output range.
+     * The RMS of the error minus its mean, in % of `range`.
      */
     double std_percent;
 } HystcompErrorStats;
@@ -498,7 +520,37 @@ typedef struct HystcompFitReport {
      * Wall-clock time of the identification, s.
      */
     double elapsed_s;
+    /**
+     * The number of play operators of the model (the choice with `operators_auto`).
+     */
+    size_t operators;
+    /**
+     * With `for_delayed` (plant models): the bound both delayed loops' gains were held to;
+     * NaN otherwise.
+     */
+    double delayed_loop_bound;
+    /**
+     * With `for_delayed` (plant models): the fit's RMS error without the bound, in % of the
+     * fitted output range (the bound's cost is `fit.rms_percent` minus this); NaN otherwise.
+     */
+    double unconstrained_fit_rms_percent;
 } HystcompFitReport;
+
+/**
+ * What `hystcomp_predict` found besides the per-sample values.
+ */
+typedef struct HystcompPrediction {
+    /**
+     * The errors over every sample (`predicted - measured`), in the model's output unit and in
+     * % of the measured output's range over the record.
+     */
+    struct HystcompErrorStats error;
+    /**
+     * Samples whose input lies outside the range the model was identified on (it
+     * extrapolates there).
+     */
+    size_t outside_input_range;
+} HystcompPrediction;
 
 /**
  * The learning law's options (`hystcomp_learn::LearningOptions`). Fill it with
@@ -1189,7 +1241,8 @@ void hystcomp_compensator_free(struct HystcompCompensator *h);
 /**
  * Fills `*options` with the defaults: a plant model, least squares, 10 operators, automatic
  * warm-up, no hold-out, a fitted output offset, margin 0.001, poor fits refused, the swarm's
- * 40 particles x 200 iterations from seed 0, units V and um.
+ * 50 particles on a ring x 10000 iterations from seed 0, units V and um, no delayed-loop
+ * bound (`for_delayed` 0, bound 0.9), `operators` as given (`operators_auto` 0).
  *
  * Fails with `NULL_POINTER`.
  *
@@ -1207,7 +1260,9 @@ int hystcomp_identify_options_default(struct HystcompIdentifyOptions *options);
  * - `voltage`, `voltage_len`, `displacement`, `displacement_len`: the record, one pair per
  *   sample: equal lengths, not empty, finite, not constant. The model's input is the voltage
  *   for a plant model and the displacement for an inverse one.
- * - `options`: NULL for the defaults (`hystcomp_identify_options_default`).
+ * - `options`: NULL for the defaults (`hystcomp_identify_options_default`); with
+ *   `for_delayed` both delayed loops' gains are bounded, with `operators_auto` the number of
+ *   play operators is chosen by held-out error.
  * - `out`: receives the model (NULL on failure); its `identification_json` holds the whole fit
  *   report. Free it with `hystcomp_model_free`.
  * - `report`: receives the fit report's numbers, or NULL when not wanted.
@@ -1228,6 +1283,35 @@ int hystcomp_identify(const double *voltage,
                       const struct HystcompIdentifyOptions *options,
                       struct HystcompModel **out,
                       struct HystcompFitReport *report);
+
+/**
+ * A model's prediction of a record, as `hystcomp predict` does: the model runs from its reset
+ * state (zero operator memory, eq. (1); with `settled` non-zero a creep link taken as having
+ * rested long at the first sample) over its input, a plant model over `voltage`, an inverse
+ * model over `displacement`, and is compared with the other signal.
+ *
+ * - `voltage`, `displacement`: the record, `len` samples each, finite;
+ * - `predicted`, `error`: receive the predicted output and `predicted - measured`, `len`
+ *   doubles each (either may be NULL when not wanted);
+ * - `summary`: receives the errors' statistics and the count of inputs outside the model's
+ *   range (or NULL).
+ *
+ * Fails with `NULL_POINTER` or `INVALID_ARGUMENT` (`len` 0, a NaN or infinite sample, a
+ * prediction that is not finite: the message names the sample); nothing is written then.
+ *
+ * # Safety
+ * `model` must be a live model handle or NULL; `voltage` and `displacement` must point to
+ * `len` readable doubles (or be NULL); `predicted` and `error` to `len` writable doubles (or
+ * be NULL); `summary` be valid for one write (or NULL).
+ */
+int hystcomp_predict(const struct HystcompModel *model,
+                     const double *voltage,
+                     const double *displacement,
+                     size_t len,
+                     int settled,
+                     double *predicted,
+                     double *error,
+                     struct HystcompPrediction *summary);
 
 /**
  * (D1), corrected (ERRATA item 2): writes `max |y - y_d| / (max y_d - min y_d) * 100` to
