@@ -129,7 +129,7 @@ impl Identification {
 /// options and ``IdentificationError`` when no model can be identified (the message says what
 /// to change).
 #[pyfunction]
-#[pyo3(signature = (voltage, displacement, n = 10, method = "ls", direction = "plant", *, seed = 0, thresholds = None, warmup = WarmupArg::Name("auto".into()), holdout = 0.2, offset = OffsetArg::Name("fit".into()), margin = hystcomp_identify::DEFAULT_MARGIN, particles = hystcomp_identify::DEFAULT_PARTICLES, iterations = hystcomp_identify::DEFAULT_ITERATIONS, polish = false, accept_poor_fit = false, voltage_unit = "V", displacement_unit = "um", for_delayed = false, delayed_loop_bound = hystcomp_identify::DEFAULT_DELAYED_LOOP_BOUND))]
+#[pyo3(signature = (voltage, displacement, n = OperatorsArg::Count(10), method = "ls", direction = "plant", *, seed = 0, thresholds = None, warmup = WarmupArg::Name("auto".into()), holdout = 0.2, offset = OffsetArg::Name("fit".into()), margin = hystcomp_identify::DEFAULT_MARGIN, particles = hystcomp_identify::DEFAULT_PARTICLES, iterations = hystcomp_identify::DEFAULT_ITERATIONS, polish = false, accept_poor_fit = false, voltage_unit = "V", displacement_unit = "um", for_delayed = false, delayed_loop_bound = hystcomp_identify::DEFAULT_DELAYED_LOOP_BOUND))]
 #[allow(clippy::too_many_arguments)]
 pub fn identify(
     py: Python<'_>,

@@ -355,7 +355,10 @@ class Identification:
         """The normalised parameters, as a dict."""
     @property
     def order_selection(self) -> Optional[Dict[str, Any]]:
-        """x"""
+        """With ``n="auto"``: how the number of play operators was chosen, a dict with
+        ``operators`` (the choice), ``holdout`` (the fraction of the record held out to choose
+        it) and ``candidates`` (each tried: ``operators``, ``fit_rms_percent``,
+        ``holdout_rms_percent``); ``None`` when ``n`` was given."""
 
 def identify(
     voltage: ArrayLike,
@@ -383,45 +386,64 @@ def identify(
     and measured displacements (equal lengths, finite), as ``hystcomp identify`` does.
 
     - ``n``: play operators at thresholds ``(i - 1)/n`` of the input range (eq. (11)), unless
-      ``thresholds`` gives them (fractions of the input range in ``[0, 1)``, increasing);
+      ``thresholds`` gives them (fractions of the input range in ``[0, 1)``, increasing); or
+      ``"auto"``: the one of 5, 10, 15, 20, 30, 40, 50 whose model predicts the last
+      ``holdout`` of the record (25 % when ``holdout`` is 0) best, fitted on the rest, as
+      ``hystcomp identify -n auto`` (``.order_selection`` says which and why);
     - ``method``: ``"ls"`` (constrained least squares, the global optimum) or ``"pso"``
       (particle swarm, as the paper; ``seed``, ``particles``, ``iterations``, ``polish``);
     - ``direction``: ``"plant"`` (voltage to displacement, for IHC and WIHC) or ``"inverse"``
       (displacement to voltage, for DIHC);
-    - ``warmup``: ``"auto"`` or a number of leading samples excluded from the fit;
+    - ``warmup``: ``"auto"`` (up to where the operators' memory becomes known: the voltage
+      within 1 % of an end of the record's range), ``"estimate"`` (every sample fitted, the
+      memory at the first one estimated with the parameters) or a number of leading samples
+      excluded from the fit; ``report.warmup.reason`` says which samples were used and why;
     - ``holdout``: the fraction of samples at the end held out of the fit and reported (0.2,
       as ``hystcomp identify``; 0 fits the whole record);
     - ``offset``: ``"fit"`` (a constant fitted for the sensor's arbitrary zero), ``"none"`` or a
       physical output offset;
     - ``margin``: the smallest branch slope the model must keep (normalised);
     - ``accept_poor_fit``: return the model even when its RMS fit error exceeds the 10 % of the
-      output range a usable hysteresis model stays under (by default ``IdentificationError``).
+      output range a usable hysteresis model stays under (by default ``IdentificationError``);
+    - ``for_delayed``: a plant model meant for the one-sample-delayed compensators
+      (``ihc-delayed``, ``wihc-delayed``): both delayed loops' gains, over every number of
+      moving operators and every drive in the fitted range, held to at most
+      ``delayed_loop_bound`` (in ``(0, 1)``), so that neither loop can oscillate, as ``hystcomp
+      identify --for-delayed``; the report's ``delayed_constraint`` says what it cost in fit
+      RMS. Inverse models ignore it.
 
     Releases the GIL while it runs. Raises ``InvalidValueError`` for unusable samples or
     options and ``IdentificationError`` when no model can be identified (the message says what
     to change)."""
 
 class Prediction:
-    """x"""
+    """A model's prediction of a record (``hystcomp predict``): ``.predicted`` and ``.error``
+    (predicted minus measured; numpy arrays, one per sample, in the model's output unit),
+    ``.stats`` (an ``ErrorStats``: RMS, max, mean, in the unit and in % of the measured
+    output's range ``.stats.range``), ``.outside_input_range`` (samples the model
+    extrapolates), ``.initial_state`` and ``.direction``."""
 
     @property
     def predicted(self) -> FloatArray:
-        """x"""
+        """The predicted output: the displacement for a plant model, the voltage for an inverse
+        one."""
     @property
     def error(self) -> FloatArray:
-        """x"""
+        """Predicted minus measured, one per sample."""
     @property
     def stats(self) -> ErrorStats:
-        """x"""
+        """The errors over every sample, an ``ErrorStats`` (``rms_percent`` is in % of the measured
+        output's range over the record, ``range``)."""
     @property
     def outside_input_range(self) -> int:
-        """x"""
+        """Samples whose input lies outside the range the model was identified on."""
     @property
     def initial_state(self) -> str:
-        """x"""
+        """How the model started (its reset state, eq. (1); a creep link settled with
+        ``settled=True``)."""
     @property
     def direction(self) -> str:
-        """x"""
+        """``"plant"`` or ``"inverse"``."""
     def __len__(self) -> int: ...
 
 def predict(
@@ -431,7 +453,12 @@ def predict(
     *,
     settled: bool = False,
 ) -> Prediction:
-    """x"""
+    """Runs ``model`` (a ``ModelFile``) over a record from its reset state (zero operator memory,
+    eq. (1)), as ``hystcomp predict`` does: a plant model over ``voltage``, compared with
+    ``displacement``; an inverse model the other way round (equal lengths, finite, not empty).
+    ``settled``: a creep link taken as having rested long at the first sample. Returns a
+    ``Prediction``. Raises ``InvalidValueError`` for unusable samples or a prediction that is
+    not finite (naming the sample). Releases the GIL while it runs."""
 
 class Stage:
     """A simulated piezo nanopositioning stage (DAC, amplifier, hysteresis, creep, resonance,
