@@ -138,6 +138,9 @@ class FitReport(_Report):
     #: gains were held to and what it cost: the fit RMS without it and its gains. ``None``
     #: otherwise.
     delayed_constraint: Optional[Dict[str, Any]] = None
+    #: Which samples were fitted and why: ``{"mode": ..., "first_fitted": ...,
+    #: "memory_known_from": ..., "reason": ...}`` (the warm-up of ``hystcomp identify``'s report).
+    warmup: Optional[Dict[str, Any]] = None
     extra: Dict[str, Any] = field(default_factory=dict)
 
 
