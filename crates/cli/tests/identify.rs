@@ -913,3 +913,115 @@ fn for_delayed_fits_a_model_compensate_runs_with_the_delayed_loops() {
     );
     assert!(drive.exists());
 }
+
+/// Issue 10: which samples were fitted and why, on stderr and in `--json`; `--warmup
+/// estimate`; `--input-degree` (a degree-7 model file that `compensate` runs), and the
+/// degrees and solvers it refuses. On the shared DBO record, which starts mid-range.
+#[test]
+fn warmup_reasons_and_input_degree_on_the_dbo_record() {
+    let Some(data) = hystcomp_testkit::dbo_record("Model_Vi_Do.dat") else {
+        return;
+    };
+    let dir = tempfile::tempdir().unwrap();
+    let model = dir.path().join("d7.json");
+    let base = [
+        "--json",
+        "identify",
+        "--data",
+        s(&data),
+        "--voltage-column",
+        "1",
+        "--displacement-column",
+        "5",
+        "-o",
+        s(&model),
+    ];
+    let run = |extra: &[&str]| {
+        let mut args = base.to_vec();
+        args.extend(extra);
+        let out = hystcomp(&args);
+        assert!(out.status.success(), "{extra:?}: {}", stderr(&out));
+        let doc: Value = serde_json::from_str(&stdout(&out)).unwrap();
+        (doc, stderr(&out))
+    };
+    let (auto, message) = run(&[]);
+    let w = &auto["report"]["warmup"];
+    assert_eq!(w["mode"], "auto");
+    assert_eq!(w["first_fitted"], 44);
+    assert_eq!(auto["report"]["samples"]["warmup"], 44);
+    assert!(
+        message.contains("fitted samples 45..6431 of 8027"),
+        "{message}"
+    );
+    assert!(message.contains("wiping-out"), "{message}");
+    assert!(w["reason"].as_str().unwrap().contains("sample 45"), "{w}");
+
+    let (estimate, message) = run(&["--warmup", "estimate"]);
+    let w = &estimate["report"]["warmup"];
+    assert_eq!(w["mode"], "estimate");
+    assert_eq!(w["first_fitted"], 0);
+    assert_eq!(w["history"].as_array().unwrap().len(), 3);
+    assert_eq!(w["initial_memory"].as_array().unwrap().len(), 10);
+    assert!(
+        message.contains("estimated with the parameters"),
+        "{message}"
+    );
+
+    let (seventh, _) = run(&["--input-degree", "7"]);
+    let cubic = auto["report"]["fit"]["rms_percent"].as_f64().unwrap();
+    let d7 = seventh["report"]["fit"]["rms_percent"].as_f64().unwrap();
+    assert!(
+        d7 <= cubic * (1.0 + 1e-9),
+        "degree 7 {d7} % against the cubic's {cubic} %"
+    );
+    let file = ModelFile::load(&model).unwrap();
+    assert_eq!(file.input_polynomial.as_ref().unwrap().len(), 7);
+    // The degree-7 model compensates (exact IHC) within its limits.
+    let desired = dir.path().join("desired.csv");
+    let mut text = String::from("time_s,desired_um\n");
+    for k in 0..400 {
+        let t = k as f64 / 200.0;
+        text.push_str(&format!(
+            "{t},{}\n",
+            -96.0 + 18.0 * (2.0 * std::f64::consts::PI * t).sin()
+        ));
+    }
+    std::fs::write(&desired, text).unwrap();
+    let drive = dir.path().join("drive.csv");
+    let out = hystcomp(&[
+        "compensate",
+        "--model",
+        s(&model),
+        "--desired",
+        s(&desired),
+        "--method",
+        "ihc",
+        "--allow-saturation",
+        "-o",
+        s(&drive),
+    ]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let written = std::fs::read_to_string(&drive).unwrap();
+    let (lo, hi) = (file.input.offset, file.input.offset + file.input.scale);
+    let mut rows = 0;
+    for line in written.lines().skip(1) {
+        let v: f64 = line.split(',').nth(1).unwrap().parse().unwrap();
+        assert!(v.is_finite() && v >= lo - 1e-9 && v <= hi + 1e-9, "{line}");
+        rows += 1;
+    }
+    assert_eq!(rows, 400);
+
+    for (extra, fragment) in [
+        (&["--input-degree", "4"][..], "--input-degree 4"),
+        (&["--input-degree", "11"][..], "--input-degree 11"),
+        (
+            &["--input-degree", "7", "--method", "pso"][..],
+            "needs --method ls",
+        ),
+        (&["--warmup", "later"][..], "auto, estimate"),
+    ] {
+        let mut args = base.to_vec();
+        args.extend(extra);
+        assert_fails(&args, &[fragment]);
+    }
+}

@@ -883,6 +883,13 @@ pub fn run(args: &Args, ctx: Context) -> Result<(), CliError> {
                 options.input_degree
             )));
         }
+        if options.warmup == Warmup::Estimate {
+            return Err(CliError::input(
+                "--warmup estimate is not available with the creep or vibration chain, whose \
+                 joint fit runs the operators from zero memory; use --warmup auto (the \
+                 default) or a number of samples",
+            ));
+        }
         return run_chain(args, ctx, &loaded, &options, &chain);
     }
     let mut bar = if args.fit.iterates() {
