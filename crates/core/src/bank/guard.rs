@@ -55,7 +55,7 @@ impl<T: Real, const W: usize> GuardLanes<T, W> {
     /// `OutputGuard::accept`: the lanes whose desired position is finite; the others are
     /// counted (their output is the previous one).
     #[inline(always)]
-    pub fn accept(&mut self, desired: L<T, W>) -> Mask<W> {
+    pub fn accept(&mut self, desired: L<T, W>) -> Mask<T, W> {
         let finite = desired.is_finite();
         self.non_finite = self.non_finite + (!finite).count();
         finite
@@ -80,7 +80,7 @@ impl<T: Real, const W: usize> GuardLanes<T, W> {
     /// (`OutputGuard::emit_classified`'s condition: `limited`, a non-finite value, or a clamp
     /// beyond rounding).
     #[inline(always)]
-    pub fn clamp(&self, value: L<T, W>, limited: Mask<W>) -> (L<T, W>, Mask<W>) {
+    pub fn clamp(&self, value: L<T, W>, limited: Mask<T, W>) -> (L<T, W>, Mask<T, W>) {
         let out = self.clamp_or(value, self.previous);
         let rounding = Lanes::splat(T::epsilon() * T::from_f64(64.0))
             * value.abs().max(Lanes::splat(T::one()));
@@ -94,9 +94,9 @@ impl<T: Real, const W: usize> GuardLanes<T, W> {
     pub fn record(
         &mut self,
         out: L<T, W>,
-        clamped: Mask<W>,
-        reachable: Mask<W>,
-        active: Mask<W>,
+        clamped: Mask<T, W>,
+        reachable: Mask<T, W>,
+        active: Mask<T, W>,
     ) -> L<T, W> {
         let counted = clamped & active;
         self.loop_saturated = self.loop_saturated + (counted & reachable).count();
@@ -108,7 +108,7 @@ impl<T: Real, const W: usize> GuardLanes<T, W> {
     /// `OutputGuard::emit` for the lanes of `active`: clamps, counts, records. Returns every
     /// lane's output (the previous one for the lanes not active).
     #[inline(always)]
-    pub fn emit(&mut self, value: L<T, W>, limited: Mask<W>, active: Mask<W>) -> L<T, W> {
+    pub fn emit(&mut self, value: L<T, W>, limited: Mask<T, W>, active: Mask<T, W>) -> L<T, W> {
         let (out, clamped) = self.clamp(value, limited);
         self.record(out, clamped, Mask::splat(false), active)
     }

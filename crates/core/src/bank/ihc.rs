@@ -150,7 +150,7 @@ impl<T: Real, R: LaneRemainder<T, W>, const W: usize> LaneEquation<T, W> for Eq5
         alpha: L<T, W>,
         beta: L<T, W>,
         inv_alpha: L<T, W>,
-        active: Mask<W>,
+        active: Mask<T, W>,
     ) -> L<T, W> {
         let v = increasing_root(
             self.remainder,
@@ -192,7 +192,7 @@ impl<T: Real, const W: usize> LaneEquation<T, W> for Eq5Delayed<T, W> {
         _alpha: L<T, W>,
         _beta: L<T, W>,
         _inv: L<T, W>,
-        _active: Mask<W>,
+        _active: Mask<T, W>,
     ) -> L<T, W> {
         self.w.max(lo).min(hi)
     }
@@ -218,7 +218,7 @@ impl<T: Real, const W: usize> LaneEquation<T, W> for ReachControl<T, W> {
         _alpha: L<T, W>,
         beta: L<T, W>,
         inv_alpha: L<T, W>,
-        _active: Mask<W>,
+        _active: Mask<T, W>,
     ) -> L<T, W> {
         ((self.control - beta) * inv_alpha).max(lo).min(hi)
     }

@@ -20,9 +20,11 @@ use crate::Real;
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub(crate) struct Lanes<T, const W: usize>(pub [T; W]);
 
-/// One flag per lane: the vector form of a condition.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub(crate) struct Mask<const W: usize>(pub [bool; W]);
+/// One flag per lane: the vector form of a condition. A lane is all ones (set) or all zeros in
+/// an integer as wide as `T` ([`Real::Bits`]), the form vector compares produce and blends
+/// consume, so that a condition never leaves the vector registers.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) struct Mask<T: Real, const W: usize>(pub [T::Bits; W]);
 
 impl<T: Copy, const W: usize> Lanes<T, W> {
     /// The same value in every lane.
@@ -45,37 +47,41 @@ impl<T: Copy, const W: usize> Lanes<T, W> {
 
     /// `f(a)` lane by lane, as a mask.
     #[inline(always)]
-    pub fn test(self, f: impl Fn(T) -> bool) -> Mask<W> {
-        let mut out = [false; W];
+    pub fn test<M: Real>(self, f: impl Fn(T) -> bool) -> Mask<M, W> {
+        let mut out = [M::Bits::default(); W];
         for l in 0..W {
-            out[l] = f(self.0[l]);
+            out[l] = Mask::<M, W>::flag(f(self.0[l]));
         }
         Mask(out)
     }
 
     /// `f(a, b)` lane by lane, as a mask.
     #[inline(always)]
-    pub fn compare(self, other: Self, f: impl Fn(T, T) -> bool) -> Mask<W> {
-        let mut out = [false; W];
+    pub fn compare<M: Real>(self, other: Self, f: impl Fn(T, T) -> bool) -> Mask<M, W> {
+        let mut out = [M::Bits::default(); W];
         for l in 0..W {
-            out[l] = f(self.0[l], other.0[l]);
+            out[l] = Mask::<M, W>::flag(f(self.0[l], other.0[l]));
         }
         Mask(out)
     }
 
     /// `if mask { yes } else { no }` lane by lane.
     #[inline(always)]
-    pub fn select(mask: Mask<W>, yes: Self, no: Self) -> Self {
+    pub fn select<M: Real>(mask: Mask<M, W>, yes: Self, no: Self) -> Self {
         let mut out = no.0;
         for l in 0..W {
-            out[l] = if mask.0[l] { yes.0[l] } else { no.0[l] };
+            out[l] = if mask.0[l] != M::Bits::default() {
+                yes.0[l]
+            } else {
+                no.0[l]
+            };
         }
         Lanes(out)
     }
 
     /// `self` where `mask` is set, `no` elsewhere.
     #[inline(always)]
-    pub fn or_keep(self, mask: Mask<W>, no: Self) -> Self {
+    pub fn or_keep<M: Real>(self, mask: Mask<M, W>, no: Self) -> Self {
         Self::select(mask, self, no)
     }
 }
@@ -102,32 +108,32 @@ impl<T: Real, const W: usize> Lanes<T, W> {
     }
 
     #[inline(always)]
-    pub fn lt(self, other: Self) -> Mask<W> {
+    pub fn lt(self, other: Self) -> Mask<T, W> {
         self.compare(other, |a, b| a < b)
     }
 
     #[inline(always)]
-    pub fn le(self, other: Self) -> Mask<W> {
+    pub fn le(self, other: Self) -> Mask<T, W> {
         self.compare(other, |a, b| a <= b)
     }
 
     #[inline(always)]
-    pub fn gt(self, other: Self) -> Mask<W> {
+    pub fn gt(self, other: Self) -> Mask<T, W> {
         self.compare(other, |a, b| a > b)
     }
 
     #[inline(always)]
-    pub fn ge(self, other: Self) -> Mask<W> {
+    pub fn ge(self, other: Self) -> Mask<T, W> {
         self.compare(other, |a, b| a >= b)
     }
 
     #[inline(always)]
-    pub fn is_finite(self) -> Mask<W> {
+    pub fn is_finite(self) -> Mask<T, W> {
         self.test(|a| a.is_finite())
     }
 
     #[inline(always)]
-    pub fn is_nan(self) -> Mask<W> {
+    pub fn is_nan(self) -> Mask<T, W> {
         self.test(|a| a.is_nan())
     }
 }
@@ -157,23 +163,33 @@ impl<T: Copy + Neg<Output = T>, const W: usize> Neg for Lanes<T, W> {
     }
 }
 
-impl<const W: usize> Mask<W> {
+impl<T: Real, const W: usize> Mask<T, W> {
+    /// The lane of a condition: all ones if set.
+    #[inline(always)]
+    pub fn flag(set: bool) -> T::Bits {
+        if set {
+            !T::Bits::default()
+        } else {
+            T::Bits::default()
+        }
+    }
+
     /// Every lane set to `value`.
     #[inline(always)]
     pub fn splat(value: bool) -> Self {
-        Mask([value; W])
+        Mask([Self::flag(value); W])
     }
 
     /// Whether any lane is set (no early exit, so that it vectorises).
     #[inline(always)]
     pub fn any(self) -> bool {
-        self.0.iter().fold(false, |a, &b| a | b)
+        self.0.iter().fold(T::Bits::default(), |a, &b| a | b) != T::Bits::default()
     }
 
     /// Whether every lane is set.
     #[inline(always)]
     pub fn all(self) -> bool {
-        self.0.iter().fold(true, |a, &b| a & b)
+        !(!self).any()
     }
 
     /// `if choose { yes } else { no }` lane by lane.
@@ -191,17 +207,17 @@ impl<const W: usize> Mask<W> {
     /// 1 where set, 0 elsewhere.
     #[inline(always)]
     pub fn count(self) -> Lanes<u64, W> {
-        Lanes(self.0).map(u64::from)
+        Lanes(self.0).map(|m| u64::from(T::low_bit(m)))
     }
 
     /// 1 where set, 0 elsewhere, as counts of operators.
     #[inline(always)]
     pub fn count32(self) -> Lanes<u32, W> {
-        Lanes(self.0).map(u32::from)
+        Lanes(self.0).map(T::low_bit)
     }
 }
 
-impl<const W: usize> BitAnd for Mask<W> {
+impl<T: Real, const W: usize> BitAnd for Mask<T, W> {
     type Output = Self;
     #[inline(always)]
     fn bitand(self, other: Self) -> Self {
@@ -213,7 +229,7 @@ impl<const W: usize> BitAnd for Mask<W> {
     }
 }
 
-impl<const W: usize> BitOr for Mask<W> {
+impl<T: Real, const W: usize> BitOr for Mask<T, W> {
     type Output = Self;
     #[inline(always)]
     fn bitor(self, other: Self) -> Self {
@@ -225,7 +241,7 @@ impl<const W: usize> BitOr for Mask<W> {
     }
 }
 
-impl<const W: usize> Not for Mask<W> {
+impl<T: Real, const W: usize> Not for Mask<T, W> {
     type Output = Self;
     #[inline(always)]
     fn not(self) -> Self {

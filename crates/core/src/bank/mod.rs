@@ -14,9 +14,11 @@
 //! the `W` channels side by side, then their weights, and so on. The per-sample work of a
 //! block is the single-channel compensator's work written lane by lane, so the compiler turns
 //! it into vector instructions across channels (AVX2 on x86-64, chosen at run time). Each
-//! branch of the single-channel code becomes a mask; an exact solve that needs more segments
-//! or root-finder iterations in one lane than in the others runs those lanes alone while the
-//! others wait masked (a block costs as much as its slowest lane).
+//! branch of the single-channel code becomes a mask (each lane all ones or all zeros in an
+//! integer as wide as the sample type, the form vector compares produce and blends consume,
+//! so that a condition never leaves the vector registers); an exact solve that needs more
+//! segments or root-finder iterations in one lane than in the others runs those lanes alone
+//! while the others wait masked (a block costs as much as its slowest lane).
 //!
 //! # The single channel is the oracle
 //! Every lane performs the operations of its single-channel twin ([`crate::Ihc`],

@@ -1,7 +1,7 @@
 //! What IHC and WIHC banks share: a channel's compensator written into its lane, and a block's
 //! input polynomials read back for the per-sample solve.
 
-use super::lanes::{Lanes, Mask};
+use super::lanes::Lanes;
 use super::root::{CubicLanes, PolynomialLanes};
 use super::storage::{
     BankStorage, Block, Blocks, LOOP_SATURATED, NON_FINITE, PlantRows, SATURATED, blocks,
@@ -159,7 +159,7 @@ pub(crate) fn write_counters<T: Real, S: BankStorage<T, W>, const W: usize>(
 /// Whether every lane of the block has the paper's odd cubic.
 #[inline(always)]
 pub(crate) fn all_odd_cubic<T: Real, const W: usize>(block: &Block<'_, T, W>, row: usize) -> bool {
-    block.count(row).test(|odd| odd != 0).all()
+    block.count(row).test::<T>(|odd| odd != 0).all()
 }
 
 /// The block's cubic coefficients `a1` (row of `c_3`).
@@ -189,6 +189,6 @@ pub(crate) fn polynomial_lanes<T: Real, const W: usize>(
         coefficients,
         rows,
         degree: block.count(degree_row),
-        odd_cubic: Mask(block.count(odd_row).test(|odd| odd != 0).0),
+        odd_cubic: block.count(odd_row).test(|odd| odd != 0),
     }
 }

@@ -46,7 +46,7 @@ pub(crate) trait LaneEquation<T: Real, const W: usize> {
         alpha: L<T, W>,
         beta: L<T, W>,
         inverse_alpha: L<T, W>,
-        active: Mask<W>,
+        active: Mask<T, W>,
     ) -> L<T, W>;
 }
 
@@ -100,19 +100,19 @@ impl<T: Real, const W: usize> PlayState<T, W> {
 /// The solution of [`solve`] in every lane: the bank's input, whether a limit cut it short,
 /// and the segment it lies on.
 #[derive(Debug, Clone, Copy)]
-pub(crate) struct LaneSolution<T, const W: usize> {
+pub(crate) struct LaneSolution<T: Real, const W: usize> {
     pub input: L<T, W>,
-    pub saturated: Mask<W>,
+    pub saturated: Mask<T, W>,
     pub alpha: L<T, W>,
     pub beta: L<T, W>,
     pub moving: U<W>,
-    pub rising: Mask<W>,
+    pub rising: Mask<T, W>,
 }
 
 impl<T: Real, const W: usize> LaneSolution<T, W> {
     /// `self` in the lanes of `mask`, `other` elsewhere.
     #[inline(always)]
-    pub fn select(self, mask: Mask<W>, other: Self) -> Self {
+    pub fn select(self, mask: Mask<T, W>, other: Self) -> Self {
         LaneSolution {
             input: self.input.or_keep(mask, other.input),
             saturated: Mask::choose(mask, self.saturated, other.saturated),
@@ -156,7 +156,7 @@ impl<T: Real, E: LaneEquation<T, W>, const W: usize> LaneEquation<T, W> for Reac
         _alpha: L<T, W>,
         _beta: L<T, W>,
         _inv: L<T, W>,
-        _active: Mask<W>,
+        _active: Mask<T, W>,
     ) -> L<T, W> {
         lo
     }
@@ -175,14 +175,14 @@ pub(crate) fn solve<T: Real, E: LaneEquation<T, W>, const W: usize>(
     f_prev: L<T, W>,
     limit_min: L<T, W>,
     limit_max: L<T, W>,
-    active: Mask<W>,
+    active: Mask<T, W>,
 ) -> LaneSolution<T, W> {
     let zero = Lanes::zero();
     let rising = f_prev.le(zero);
     let first = U::select(rising, state.rising, state.falling).zip(state.operators, u32::min);
     // The moving operators fold into the first segment: prefix[first - 1], and the reciprocal
     // slope 1 / (a + prefix[first - 1]) from the table (1 / a with none moving).
-    let some_moving = first.test(|k| k > 0);
+    let some_moving = first.test::<T>(|k| k > 0);
     let before = first.map(|k| k.saturating_sub(1));
     let moving_weight = block
         .gather(rows.prefix(), before)
@@ -289,7 +289,7 @@ pub(crate) fn update_memory<T: Real, const W: usize>(
     n: usize,
     operators: U<W>,
     x: L<T, W>,
-    active: Mask<W>,
+    active: Mask<T, W>,
     count: bool,
     uniform: bool,
 ) -> Fed<T, W> {
@@ -310,7 +310,7 @@ pub(crate) fn update_memory_with<T: Real, const W: usize>(
     n: usize,
     operators: U<W>,
     x: L<T, W>,
-    active: Mask<W>,
+    active: Mask<T, W>,
     edges: bool,
     sum: bool,
     uniform: bool,
@@ -353,7 +353,7 @@ pub(crate) fn update_memory_with<T: Real, const W: usize>(
                 tail[(i - uniform_full).min(2)] = term;
             }
         } else {
-            let grouped = full.test(|f| i32 < f);
+            let grouped = full.test::<T>(|f| i32 < f);
             partial[i % 4] = (partial[i % 4] + term).or_keep(grouped, partial[i % 4]);
             for (k, t) in tail.iter_mut().enumerate() {
                 let here = full.test(|f| f + k as u32 == i32) & inside;
@@ -364,7 +364,7 @@ pub(crate) fn update_memory_with<T: Real, const W: usize>(
     let mut total = (partial[0] + partial[1]) + (partial[2] + partial[3]);
     if sum {
         for (k, t) in tail.into_iter().enumerate() {
-            let has = full.compare(operators, |f, n| f + (k as u32) < n);
+            let has = full.compare::<T>(operators, |f, n| f + (k as u32) < n);
             total = (total + t).or_keep(has, total);
         }
     }
@@ -383,7 +383,7 @@ pub(crate) fn feed<T: Real, const W: usize>(
     rows: &PlantRows,
     state: &mut PlayState<T, W>,
     x: L<T, W>,
-    active: Mask<W>,
+    active: Mask<T, W>,
     uniform: bool,
 ) -> L<T, W> {
     let fed = update_memory(
@@ -414,7 +414,7 @@ pub(crate) fn feed_solved<T: Real, const W: usize>(
     rows: &PlantRows,
     state: &mut PlayState<T, W>,
     solution: &LaneSolution<T, W>,
-    active: Mask<W>,
+    active: Mask<T, W>,
     uniform: bool,
 ) -> L<T, W> {
     feed_solved_or_full(
@@ -436,8 +436,8 @@ pub(crate) fn feed_solved_or_full<T: Real, const W: usize>(
     rows: &PlantRows,
     state: &mut PlayState<T, W>,
     solution: &LaneSolution<T, W>,
-    active: Mask<W>,
-    full: Mask<W>,
+    active: Mask<T, W>,
+    full: Mask<T, W>,
     uniform: bool,
 ) -> L<T, W> {
     let x = solution.input;

@@ -51,7 +51,7 @@ impl<T: Real, const W: usize> LaneRemainder<T, W> for CubicLanes<T, W> {
 /// coefficients are skipped, not multiplied by zero, so that the bits equal its own), and the
 /// lanes that are the paper's odd cubic, which take its arithmetic.
 #[derive(Debug, Clone, Copy)]
-pub(crate) struct PolynomialLanes<T, const W: usize> {
+pub(crate) struct PolynomialLanes<T: Real, const W: usize> {
     /// `coefficients[j]` is `c_{j + 1}` of every lane (0 beyond a lane's degree).
     pub coefficients: [Lanes<T, W>; MAX_INPUT_DEGREE],
     /// How many coefficient rows the bank stores (the largest degree, at least 3).
@@ -59,7 +59,7 @@ pub(crate) struct PolynomialLanes<T, const W: usize> {
     /// Each lane's number of coefficients `D`.
     pub degree: Lanes<u32, W>,
     /// The lanes with the paper's odd cubic.
-    pub odd_cubic: Mask<W>,
+    pub odd_cubic: Mask<T, W>,
 }
 
 impl<T: Real, const W: usize> PolynomialLanes<T, W> {
@@ -70,7 +70,7 @@ impl<T: Real, const W: usize> PolynomialLanes<T, W> {
 
     /// Whether coefficient `j` (of `x^(j + 1)`) belongs to each lane.
     #[inline(always)]
-    fn has(&self, j: usize) -> Mask<W> {
+    fn has(&self, j: usize) -> Mask<T, W> {
         let j = j as u32;
         self.degree.test(|d| j < d)
     }
@@ -156,7 +156,7 @@ pub(crate) fn increasing_root<T: Real, R: LaneRemainder<T, W>, const W: usize>(
     mut hi: Lanes<T, W>,
     f_lo: Lanes<T, W>,
     f_hi: Lanes<T, W>,
-    active: Mask<W>,
+    active: Mask<T, W>,
 ) -> Lanes<T, W> {
     let zero = Lanes::zero();
     // The early returns: the bracket's ends.

@@ -148,7 +148,7 @@ impl<T: Real, R: LaneRemainder<T, W>, const W: usize> LaneEquation<T, W> for Eq9
         alpha: L<T, W>,
         beta: L<T, W>,
         _inv: L<T, W>,
-        active: Mask<W>,
+        active: Mask<T, W>,
     ) -> L<T, W> {
         increasing_root(
             self.remainder,
@@ -192,7 +192,7 @@ impl<T: Real, const W: usize> LaneEquation<T, W> for BankOutput<T, W> {
         _alpha: L<T, W>,
         beta: L<T, W>,
         inv_alpha: L<T, W>,
-        _active: Mask<W>,
+        _active: Mask<T, W>,
     ) -> L<T, W> {
         ((self.target - beta) * inv_alpha).max(lo).min(hi)
     }
