@@ -36,14 +36,16 @@ pub struct Bounded<T, const N: usize> {
 impl<T, const N: usize> AsRef<[T]> for Bounded<T, N> {
     #[inline]
     fn as_ref(&self) -> &[T] {
-        &self.data[..self.len]
+        // `len <= N` always (`filled` checks it); the `min` says so to the compiler, so that
+        // the slice has no panic path (the banks' per-sample code reads through it).
+        &self.data[..self.len.min(N)]
     }
 }
 
 impl<T, const N: usize> AsMut<[T]> for Bounded<T, N> {
     #[inline]
     fn as_mut(&mut self) -> &mut [T] {
-        &mut self.data[..self.len]
+        &mut self.data[..self.len.min(N)]
     }
 }
 
