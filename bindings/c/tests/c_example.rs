@@ -322,9 +322,39 @@ fn makefile_builds_and_runs_both_examples() {
     assert!(stdout.contains("round trip OK"), "{stdout}");
 }
 
+fn bank_program() -> &'static PathBuf {
+    static PROGRAM: OnceLock<PathBuf> = OnceLock::new();
+    PROGRAM.get_or_init(|| compile("bindings/c/tests/c/bank.c", "bank"))
+}
+
+/// The arguments of `bindings/c/tests/c/bank.c`: the three-axis set, Table 1's plant model and
+/// Table 2's inverse model.
+const BANK_ARGS: [&str; 3] = [
+    "models/table1-xyz-set.json",
+    "models/table1-plant.json",
+    "models/table2-inverse.json",
+];
+
+/// The bank from C (issue 16): a bank from a model set and from models in memory, stepped and
+/// processed (also in place), every channel bit for bit its own compensator for IHC, WIHC and
+/// their guarded loops; per-channel limits and diagnostics (a NaN counted on its channel
+/// only, saturation where the position is beyond reach); refused channels named by index.
+#[test]
+fn c_bank_program_steps_every_channel_as_its_own_compensator() {
+    let output = run(
+        Command::new(bank_program())
+            .current_dir(workspace_root())
+            .args(BANK_ARGS),
+        "the C bank program must pass its own checks",
+    );
+    let stdout = String::from_utf8_lossy(&output.stdout);
+    assert_eq!(stdout.trim_end(), "bank OK");
+}
+
 /// The C programs run under valgrind's memcheck: no invalid read or write, no use of an
 /// uninitialised value, no definite leak through the C ABI, on success (the round trip, the
-/// identify-save-load-compensate program) and on its refusals (an inverse model, no arguments).
+/// identify-save-load-compensate program, the learner, the bank) and on refusals (an inverse
+/// model, no arguments).
 #[test]
 fn c_programs_run_clean_under_valgrind() {
     if !hystcomp_testkit::require_tool(
@@ -356,6 +386,12 @@ fn c_programs_run_clean_under_valgrind() {
         (&models, vec![dir.path().into()], 0),
         (&learner, vec!["models/table1-plant.json".into()], 0),
         (&delayed_auto_predict, vec![], 0),
+        (
+            bank_program(),
+            BANK_ARGS.iter().map(Into::into).collect(),
+            0,
+        ),
+        (bank_program(), vec![], 2),
     ];
     for (program, args, code) in runs {
         let output = Command::new("valgrind")
