@@ -75,12 +75,21 @@ impl<T: Real, const W: usize> PolynomialLanes<T, W> {
         self.degree.test(|d| j < d)
     }
 
+    /// The coefficients `c_2 .. c_rows` (of `x^2` and up), as a slice whose length the loops
+    /// below take from it (no index to check, no panic path).
+    #[inline(always)]
+    fn higher(&self) -> &[Lanes<T, W>] {
+        self.coefficients
+            .get(1..self.rows.min(MAX_INPUT_DEGREE))
+            .unwrap_or(&[])
+    }
+
     /// `sum_{j >= 2} c_j x^(j - 2)` by Horner's rule from each lane's top coefficient.
     #[inline(always)]
     fn higher_horner(&self, x: Lanes<T, W>) -> Lanes<T, W> {
         let mut p = Lanes::zero();
-        for j in (1..self.rows.min(MAX_INPUT_DEGREE)).rev() {
-            p = (p * x + self.coefficients[j]).or_keep(self.has(j), p);
+        for (k, &c) in self.higher().iter().enumerate().rev() {
+            p = (p * x + c).or_keep(self.has(k + 1), p);
         }
         p
     }
@@ -95,8 +104,9 @@ impl<T: Real, const W: usize> PolynomialLanes<T, W> {
     #[inline(always)]
     fn general_slope(&self, x: Lanes<T, W>) -> Lanes<T, W> {
         let mut p = Lanes::zero();
-        for j in (1..self.rows.min(MAX_INPUT_DEGREE)).rev() {
-            let term = Lanes::splat(T::from_f64((j + 1) as f64)) * self.coefficients[j];
+        for (k, &c) in self.higher().iter().enumerate().rev() {
+            let j = k + 1;
+            let term = Lanes::splat(T::from_f64((j + 1) as f64)) * c;
             p = (p * x + term).or_keep(self.has(j), p);
         }
         p * x
@@ -106,8 +116,8 @@ impl<T: Real, const W: usize> PolynomialLanes<T, W> {
     fn general_size(&self, x: Lanes<T, W>) -> Lanes<T, W> {
         let mut power = x * x;
         let mut size = Lanes::zero();
-        for j in 1..self.rows.min(MAX_INPUT_DEGREE) {
-            size = (size + (self.coefficients[j] * power).abs()).or_keep(self.has(j), size);
+        for (k, &c) in self.higher().iter().enumerate() {
+            size = (size + (c * power).abs()).or_keep(self.has(k + 1), size);
             power = power * x;
         }
         size
