@@ -15,3 +15,5 @@ pub mod bounded;
 pub mod compensator;
 pub mod data;
 pub mod model_file;
+#[cfg(feature = "parallel")]
+pub mod threads;

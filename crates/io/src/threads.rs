@@ -1,0 +1,244 @@
+//! Threads for very large banks (issue 16; feature `parallel`, off by default): a bank's
+//! channels split into parts of whole blocks, each part a bank of its own, stepped on rayon's
+//! threads.
+//!
+//! Each channel of a core bank depends on its own lane only, so a part of channels `a..b`
+//! gives channel `c` the same bits as the whole bank does; splitting at whole blocks of
+//! [`LANES`] channels keeps every part's blocks full.
+//!
+//! **Off by default: it was not shown to pay at the tick sizes of issue 16.** A tick of 1 024
+//! DIHC channels is about 5 us of work on one core, less than a fork and join of rayon's threads
+//! costs on this project's shared 2-core machine (wall time per channel-step 4.6 ns on one
+//! thread, 80 ns on two, load average 11-13). For 4 096 exact IHC channels two threads ran
+//! 2.5 times faster in wall time (193 -> 79 ns f32, 441 -> 125 ns f64), but under a load of
+//! 11-13 on 2 cores a process with two threads mostly gets a larger share of the machine, not
+//! parallel speed, so this is not evidence that it pays on a controller's own cores. Measure on
+//! the target machine (`ThreadedBank` against the plain bank, same channels, interleaved runs)
+//! before enabling it. [`ThreadedBank::process`] forks once for a whole signal (each part runs
+//! every tick of its channels); [`ThreadedBank::step`] forks once per tick.
+
+use std::ops::Range;
+
+use hystcomp_core::{CompensatorBank, CoreError, Diagnostics, LANES, OutputLimits, Real};
+use rayon::prelude::*;
+
+/// A bank split into parts of whole blocks, stepped in parallel (see the
+/// [module documentation](self)). It is itself a [`CompensatorBank`]: channel `c` gives what
+/// the unsplit bank's channel `c` gives, bit for bit.
+#[derive(Debug, Clone)]
+pub struct ThreadedBank<B> {
+    parts: Vec<B>,
+    /// Channels per part (every part but the last), a multiple of [`LANES`].
+    part_channels: usize,
+    channels: usize,
+}
+
+impl<B> ThreadedBank<B> {
+    /// `channels` channels in `parts` parts (at least one, at most one per block of
+    /// [`LANES`] channels): `build(range)` makes the bank of the channels in `range` (e.g. a
+    /// core bank of `models[range]`). Its first error is returned.
+    pub fn new<E>(
+        channels: usize,
+        parts: usize,
+        mut build: impl FnMut(Range<usize>) -> Result<B, E>,
+    ) -> Result<Self, E> {
+        let blocks = channels.div_ceil(LANES).max(1);
+        let parts = parts.clamp(1, blocks);
+        let part_channels = blocks.div_ceil(parts) * LANES;
+        let mut built = Vec::with_capacity(parts);
+        let mut start = 0;
+        while start < channels {
+            let end = (start + part_channels).min(channels);
+            built.push(build(start..end)?);
+            start = end;
+        }
+        Ok(ThreadedBank {
+            parts: built,
+            part_channels,
+            channels,
+        })
+    }
+
+    /// The number of parts.
+    pub fn parts(&self) -> usize {
+        self.parts.len()
+    }
+
+    /// The part holding `channel` and the channel's index within it.
+    fn locate(&self, channel: usize) -> Option<(&B, usize)> {
+        if channel >= self.channels {
+            return None;
+        }
+        let part = self.parts.get(channel / self.part_channels)?;
+        Some((part, channel % self.part_channels))
+    }
+}
+
+impl<T: Real, B: CompensatorBank<T> + Send> CompensatorBank<T> for ThreadedBank<B> {
+    fn channels(&self) -> usize {
+        self.channels
+    }
+
+    fn reset(&mut self) {
+        self.parts.par_iter_mut().for_each(|p| p.reset());
+    }
+
+    /// One tick, every part on its own thread (one fork and join per tick).
+    fn step(&mut self, desired: &[T], control: &mut [T]) -> Result<(), CoreError> {
+        check_lengths(self.channels, desired.len(), control.len())?;
+        self.parts
+            .par_iter_mut()
+            .zip(desired.par_chunks(self.part_channels))
+            .zip(control.par_chunks_mut(self.part_channels))
+            .try_for_each(|((part, d), c)| part.step(d, c))
+    }
+
+    /// A whole signal (`samples x channels`, row-major): every part runs all the ticks of its
+    /// channels on its own thread (one fork and join per signal).
+    fn process(&mut self, desired: &[T], control: &mut [T]) -> Result<(), CoreError> {
+        let channels = self.channels;
+        if desired.len() % channels.max(1) != 0 {
+            return Err(CoreError::ChannelCount {
+                what: "desired positions",
+                channels,
+                found: desired.len(),
+            });
+        }
+        if control.len() != desired.len() {
+            return Err(CoreError::LengthMismatch {
+                what: "controls",
+                expected: desired.len(),
+                found: control.len(),
+            });
+        }
+        // Every part's slice of every row of the controls, disjoint.
+        let mut columns: Vec<Vec<&mut [T]>> = self.parts.iter().map(|_| Vec::new()).collect();
+        for row in control.chunks_exact_mut(channels.max(1)) {
+            for (piece, column) in row.chunks_mut(self.part_channels).zip(columns.iter_mut()) {
+                column.push(piece);
+            }
+        }
+        let part_channels = self.part_channels;
+        self.parts
+            .par_iter_mut()
+            .zip(columns.into_par_iter())
+            .enumerate()
+            .try_for_each(|(p, (part, column))| {
+                let start = p * part_channels;
+                for (row, c) in desired.chunks_exact(channels.max(1)).zip(column) {
+                    let end = (start + c.len()).min(row.len());
+                    let d = row.get(start..end).unwrap_or_default();
+                    part.step(d, c)?;
+                }
+                Ok(())
+            })
+    }
+
+    fn limits(&self, channel: usize) -> Option<OutputLimits<T>> {
+        let (part, c) = self.locate(channel)?;
+        part.limits(c)
+    }
+
+    fn diagnostics(&self, channel: usize) -> Option<Diagnostics> {
+        let (part, c) = self.locate(channel)?;
+        part.diagnostics(c)
+    }
+}
+
+/// One value per channel in each array.
+fn check_lengths(channels: usize, desired: usize, control: usize) -> Result<(), CoreError> {
+    for (what, found) in [("desired positions", desired), ("controls", control)] {
+        if found != channels {
+            return Err(CoreError::ChannelCount {
+                what,
+                channels,
+                found,
+            });
+        }
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use hystcomp_core::{DihcBank, Heap, IhcBank, Mpim, SolveMode, paper};
+
+    /// Channel `c`'s model: Table 1 (or 2) spread over ten operators, weights scaled by its own
+    /// factor.
+    fn model(table: &paper::PublishedMpim, c: usize) -> Mpim<f64, Vec<f64>> {
+        let base: Mpim<f64, Vec<f64>> = table.spread(10).unwrap();
+        let scale = 0.9 + 0.2 * ((c as f64) * 0.618_034).fract();
+        let weights: Vec<f64> = base.weights().iter().map(|b| b * scale).collect();
+        Mpim::new(base.thresholds(), &weights, base.a1(), base.a2()).unwrap()
+    }
+
+    fn signal(channels: usize, ticks: usize) -> Vec<f64> {
+        (0..ticks * channels)
+            .map(|i| {
+                let (k, c) = (i / channels, i % channels);
+                let y = 0.45 + 0.4 * (0.05 * k as f64 + 0.3 * c as f64).sin();
+                // A NaN now and then: held, counted on its channel.
+                if (k * 7 + c) % 211 == 0 { f64::NAN } else { y }
+            })
+            .collect()
+    }
+
+    /// Split into 1 to 5 parts, step by step and whole, every channel gives the unsplit
+    /// bank's bits, limits and diagnostics (IHC and DIHC; channel counts not a multiple of
+    /// the block size).
+    #[test]
+    fn a_threaded_bank_equals_the_whole_bank_bit_for_bit() {
+        let limits = [OutputLimits::new(0.0, 1.0).unwrap()];
+        for channels in [1, 7, 37, 100] {
+            let plants: Vec<_> = (0..channels).map(|c| model(&paper::TABLE1, c)).collect();
+            let inverses: Vec<_> = (0..channels).map(|c| model(&paper::TABLE2, c)).collect();
+            let desired = signal(channels, 60);
+            for parts in 1..=5 {
+                let ihc = |r: Range<usize>| {
+                    IhcBank::<f64, Heap>::new(&plants[r], &limits, SolveMode::Exact)
+                };
+                let dihc = |r: Range<usize>| {
+                    DihcBank::<f64, Heap>::new(&inverses[r], &[(0.0, 1.0)], &limits)
+                };
+                let mut whole_banks: Vec<Box<dyn CompensatorBank<f64>>> = vec![
+                    Box::new(ihc(0..channels).unwrap()),
+                    Box::new(dihc(0..channels).unwrap()),
+                ];
+                let mut split_banks: Vec<Box<dyn CompensatorBank<f64>>> = vec![
+                    Box::new(ThreadedBank::new(channels, parts, ihc).unwrap()),
+                    Box::new(ThreadedBank::new(channels, parts, dihc).unwrap()),
+                ];
+                for (whole, split) in whole_banks.iter_mut().zip(split_banks.iter_mut()) {
+                    let mut expected = vec![0.0; desired.len()];
+                    whole.process(&desired, &mut expected).unwrap();
+                    let mut stepped = vec![0.0; desired.len()];
+                    for (d, c) in desired
+                        .chunks_exact(channels)
+                        .zip(stepped.chunks_exact_mut(channels))
+                    {
+                        split.step(d, c).unwrap();
+                    }
+                    let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+                    assert_eq!(bits(&stepped), bits(&expected), "{channels} in {parts}");
+                    for c in 0..=channels {
+                        assert_eq!(split.limits(c), whole.limits(c));
+                        assert_eq!(split.diagnostics(c), whole.diagnostics(c));
+                    }
+                    split.reset();
+                    let mut processed = vec![0.0; desired.len()];
+                    split.process(&desired, &mut processed).unwrap();
+                    assert_eq!(bits(&processed), bits(&expected), "{channels} in {parts}");
+                    // Arrays of the wrong length are refused.
+                    let short = channels - 1;
+                    assert!(
+                        split
+                            .step(&desired[..short], &mut processed[..short])
+                            .is_err()
+                    );
+                    assert!(split.process(&desired, &mut processed[1..]).is_err());
+                }
+            }
+        }
+    }
+}
