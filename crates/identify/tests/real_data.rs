@@ -232,6 +232,12 @@ fn dbo_crossval_within_sane_bounds() {
         assert!((100..200).contains(&t.warmup), "{}", t.warmup);
         fits.push((p.fit.rms, i.fit.rms));
     }
-    // On the same data and thresholds, least squares is never worse than the swarm.
-    assert!(fits[0].0 <= fits[1].0 && fits[0].1 <= fits[1].1);
+    // On the same data and thresholds, least squares is never worse than the swarm (which now
+    // reaches the same optimum, to rounding: the swarm may land a hair inside a constraint's
+    // tolerance).
+    let within = |ls: f64, pso: f64| ls <= pso * (1.0 + 1e-9);
+    assert!(
+        within(fits[0].0, fits[1].0) && within(fits[0].1, fits[1].1),
+        "{fits:?}"
+    );
 }
