@@ -206,7 +206,7 @@ fn the_readme_blocks_and_the_example_run() {
         figure = quoted(&figure),
     ));
     assert!(
-        stdout.contains("plant model:   fit 0.674 % RMS"),
+        stdout.contains("plant model:   fit 0.679 % RMS"),
         "{stdout}"
     );
     let ihc = stdout
