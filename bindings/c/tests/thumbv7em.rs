@@ -236,10 +236,11 @@ fn compensators_build_for_a_cortex_m4f_without_an_allocator() {
     let rodata = elf.section_by_name(".rodata").map_or(0, |s| s.size());
     let bss = elf.section_by_name(".bss").map_or(0, |s| s.size());
     eprintln!("{TARGET} image: .text {text} B, .rodata {rodata} B, .bss {bss} B");
-    // The three compensators take about 23 KiB; the six-axis bank's step about 14 KiB more.
+    // The three compensators take about 23 KiB; the six-axis bank's step, with the guarded
+    // loops' reachability walk (2649e29), brings the image to about 52 KiB (53 556 B measured).
     assert!(
-        text < 48 * 1024,
-        "the three compensators and the bank take {text} bytes of code; keep them under 48 KiB"
+        text < 64 * 1024,
+        "the three compensators and the bank take {text} bytes of code; keep them under 64 KiB"
     );
 
     // The target's own `size_of` values, compiled into the image.
