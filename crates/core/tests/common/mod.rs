@@ -272,17 +272,22 @@ pub fn grid_reachable(model: &VecMpim, lo: f64, hi: f64, mut visit: impl FnMut(u
 
 /// The delayed loops' largest gains over the grid of [`grid_reachable`]: IHC
 /// `|g'(x) - a2| / (a2 + b_1 + ... + b_k)` and WIHC `|g'(x) - a2 + b_1 + ... + b_k| / a2`, with
-/// `g'` evaluated term by term.
+/// `g'` evaluated term by term. The IHC's is NaN when the PI part's slope
+/// `a2 + b_1 + ... + b_k` is zero or negative on a reachable branch: eq. (7) has no inverse
+/// there (the branch passes through x = 0, where the model's slope is that very sum, so the
+/// model is not invertible either) and no IHC is built from it.
 pub fn grid_loop_gains(model: &VecMpim, lo: f64, hi: f64) -> (f64, f64) {
     let c = model.input_polynomial().coefficients().to_vec();
     let a2 = model.a2();
     let (mut ihc, mut wihc) = (0.0f64, 0.0f64);
+    let mut pi_part_increases = true;
     grid_reachable(model, lo, hi, |_, x, prefix| {
         let h = plain_slope(&c, x) - a2;
+        pi_part_increases &= a2 + prefix > 0.0;
         ihc = ihc.max(h.abs() / (a2 + prefix));
         wihc = wihc.max((h + prefix).abs() / a2);
     });
-    (ihc, wihc)
+    (if pi_part_increases { ihc } else { f64::NAN }, wihc)
 }
 
 /// The smallest branch slope `g'(x) + b_1 + ... + b_k` over the grid of [`grid_reachable`].
