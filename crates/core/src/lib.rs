@@ -70,7 +70,7 @@ mod wihc;
 pub use bank::Heap;
 pub use bank::{
     BankError, BankStorage, CompensatorBank, DihcBank, Fixed, IhcBank, LANES, MAX_CHANNELS,
-    PLAIN_DEGREE, WihcBank, dihc_bank_rows, plant_bank_rows,
+    PLAIN_DEGREE, WihcBank, check_signal, check_tick, dihc_bank_rows, plant_bank_rows,
 };
 pub use buffer::{Bounded, Buffer};
 pub use chain::{ChainCompensator, ChainModel};

@@ -640,17 +640,7 @@ impl ScaledBank {
     }
 
     fn check_tick(&self, desired: usize, control: usize) -> Result<(), CoreError> {
-        let channels = self.channels();
-        for (what, found) in [("desired positions", desired), ("drives", control)] {
-            if found != channels {
-                return Err(CoreError::ChannelCount {
-                    what,
-                    channels,
-                    found,
-                });
-            }
-        }
-        Ok(())
+        hystcomp_core::check_tick(self.channels(), desired, control, "drives")
     }
 
     /// Every channel's desired position, normalised into the scratch row.
@@ -683,20 +673,7 @@ impl ScaledBank {
     /// after tick; refuses arrays of different lengths or not a multiple of the channel count.
     pub fn process(&mut self, desired: &[f64], control: &mut [f64]) -> Result<(), CoreError> {
         let channels = self.channels();
-        if desired.len() % channels != 0 {
-            return Err(CoreError::ChannelCount {
-                what: "desired positions",
-                channels,
-                found: desired.len(),
-            });
-        }
-        if control.len() != desired.len() {
-            return Err(CoreError::LengthMismatch {
-                what: "drives",
-                expected: desired.len(),
-                found: control.len(),
-            });
-        }
+        hystcomp_core::check_signal(channels, desired.len(), control.len(), "drives")?;
         for (d, c) in desired
             .chunks_exact(channels)
             .zip(control.chunks_exact_mut(channels))

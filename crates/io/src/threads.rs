@@ -19,7 +19,9 @@
 
 use std::ops::Range;
 
-use hystcomp_core::{CompensatorBank, CoreError, Diagnostics, LANES, OutputLimits, Real};
+use hystcomp_core::{
+    CompensatorBank, CoreError, Diagnostics, LANES, OutputLimits, Real, check_signal, check_tick,
+};
 use rayon::prelude::*;
 
 /// A bank split into parts of whole blocks, stepped in parallel (see the
@@ -85,7 +87,7 @@ impl<T: Real, B: CompensatorBank<T> + Send> CompensatorBank<T> for ThreadedBank<
 
     /// One tick, every part on its own thread (one fork and join per tick).
     fn step(&mut self, desired: &[T], control: &mut [T]) -> Result<(), CoreError> {
-        check_lengths(self.channels, desired.len(), control.len())?;
+        check_tick(self.channels, desired.len(), control.len(), "controls")?;
         self.parts
             .par_iter_mut()
             .zip(desired.par_chunks(self.part_channels))
@@ -97,20 +99,7 @@ impl<T: Real, B: CompensatorBank<T> + Send> CompensatorBank<T> for ThreadedBank<
     /// channels on its own thread (one fork and join per signal).
     fn process(&mut self, desired: &[T], control: &mut [T]) -> Result<(), CoreError> {
         let channels = self.channels;
-        if desired.len() % channels.max(1) != 0 {
-            return Err(CoreError::ChannelCount {
-                what: "desired positions",
-                channels,
-                found: desired.len(),
-            });
-        }
-        if control.len() != desired.len() {
-            return Err(CoreError::LengthMismatch {
-                what: "controls",
-                expected: desired.len(),
-                found: control.len(),
-            });
-        }
+        check_signal(channels, desired.len(), control.len(), "controls")?;
         // Every part's slice of every row of the controls, disjoint.
         let mut columns: Vec<Vec<&mut [T]>> = self.parts.iter().map(|_| Vec::new()).collect();
         for row in control.chunks_exact_mut(channels.max(1)) {
@@ -143,20 +132,6 @@ impl<T: Real, B: CompensatorBank<T> + Send> CompensatorBank<T> for ThreadedBank<
         let (part, c) = self.locate(channel)?;
         part.diagnostics(c)
     }
-}
-
-/// One value per channel in each array.
-fn check_lengths(channels: usize, desired: usize, control: usize) -> Result<(), CoreError> {
-    for (what, found) in [("desired positions", desired), ("controls", control)] {
-        if found != channels {
-            return Err(CoreError::ChannelCount {
-                what,
-                channels,
-                found,
-            });
-        }
-    }
-    Ok(())
 }
 
 #[cfg(test)]

@@ -102,7 +102,7 @@ impl<T: Real, S: BankStorage<T, W>, const W: usize> CompensatorBank<T> for IhcBa
 
     #[inline]
     fn step(&mut self, desired: &[T], control: &mut [T]) -> Result<(), CoreError> {
-        check_tick(self.channels, desired.len(), control.len())?;
+        check_tick(self.channels, desired.len(), control.len(), "controls")?;
         run(&self.kernel, self.blocks.blocks_mut(), desired, control);
         Ok(())
     }

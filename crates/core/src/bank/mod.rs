@@ -85,7 +85,7 @@ pub trait CompensatorBank<T: Real> {
     /// state).
     fn process(&mut self, desired: &[T], control: &mut [T]) -> Result<(), CoreError> {
         let channels = self.channels();
-        check_signal(channels, desired.len(), control.len())?;
+        check_signal(channels, desired.len(), control.len(), "controls")?;
         for (d, c) in desired
             .chunks_exact(channels.max(1))
             .zip(control.chunks_exact_mut(channels.max(1)))
@@ -199,9 +199,15 @@ pub(crate) fn limits_of<T: Real>(
         }))
 }
 
-/// Checks one tick's arrays: one value per channel each.
-pub(crate) fn check_tick(channels: usize, desired: usize, control: usize) -> Result<(), CoreError> {
-    for (what, found) in [("desired positions", desired), ("controls", control)] {
+/// Checks one tick's arrays: one value per channel each; `output` names the output array in
+/// the message ("controls" in the core's normalised units, "drives" in volts).
+pub fn check_tick(
+    channels: usize,
+    desired: usize,
+    control: usize,
+    output: &'static str,
+) -> Result<(), CoreError> {
+    for (what, found) in [("desired positions", desired), (output, control)] {
         if found != channels {
             return Err(CoreError::ChannelCount {
                 what,
@@ -213,11 +219,13 @@ pub(crate) fn check_tick(channels: usize, desired: usize, control: usize) -> Res
     Ok(())
 }
 
-/// Checks a whole signal's arrays: equal lengths, a multiple of the channel count.
-pub(crate) fn check_signal(
+/// Checks a whole signal's arrays (`samples x channels`, row-major): equal lengths, a multiple
+/// of the channel count; `output` names the output array as in [`check_tick`].
+pub fn check_signal(
     channels: usize,
     desired: usize,
     control: usize,
+    output: &'static str,
 ) -> Result<(), CoreError> {
     if desired % channels.max(1) != 0 {
         return Err(CoreError::ChannelCount {
@@ -228,7 +236,7 @@ pub(crate) fn check_signal(
     }
     if control != desired {
         return Err(CoreError::LengthMismatch {
-            what: "controls",
+            what: output,
             expected: desired,
             found: control,
         });
