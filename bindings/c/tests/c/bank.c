@@ -15,18 +15,8 @@
 #include <stdio.h>
 #include <string.h>
 
+#include "check.h"
 #include "hystcomp.h"
-
-static int failures = 0;
-
-#define CHECK(condition)                                                                      \
-    do {                                                                                      \
-        if (!(condition)) {                                                                   \
-            fprintf(stderr, "%s:%d: check failed: %s (last error: %s)\n", __FILE__, __LINE__, \
-                    #condition, hystcomp_last_error_message());                               \
-            failures++;                                                                       \
-        }                                                                                     \
-    } while (0)
 
 #define CHANNELS 4
 #define TICKS 500
