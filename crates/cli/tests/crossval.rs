@@ -551,7 +551,7 @@ fn consecutive_spans_carry_memory_and_match_identify_holdout() {
     assert!((range - carried["ranges"]["displacement"].as_f64().unwrap()).abs() <= 1e-9 * range);
     assert!((range - carried["forward"]["range"].as_f64().unwrap()).abs() <= 1e-9 * range);
     // --predictions runs the models as the validation does: its RMS is the report's.
-    let (header, columns_read) = read_predictions(&predictions);
+    let (header, columns_read) = read_csv(&predictions);
     let error = header.iter().position(|h| h == "error_um").unwrap();
     let rms = (columns_read[error].iter().map(|e| e * e).sum::<f64>()
         / columns_read[error].len() as f64)
@@ -576,25 +576,6 @@ fn consecutive_spans_carry_memory_and_match_identify_holdout() {
     let (separate, note) = run("1..2000", &[]);
     assert_eq!(separate["start"], "rest");
     assert!(note.contains("--test-start continue"), "{note}");
-}
-
-/// The header and columns of a CSV of numbers.
-fn read_predictions(path: &Path) -> (Vec<String>, Vec<Vec<f64>>) {
-    let text = std::fs::read_to_string(path).unwrap();
-    let mut lines = text.lines();
-    let header: Vec<String> = lines
-        .next()
-        .unwrap()
-        .split(',')
-        .map(str::to_owned)
-        .collect();
-    let mut columns = vec![Vec::new(); header.len()];
-    for line in lines {
-        for (c, v) in line.split(',').enumerate() {
-            columns[c].push(v.parse().unwrap());
-        }
-    }
-    (header, columns)
 }
 
 /// Issue 10's acceptance on the shared DBO record: `crossval` with defaults, n = 10, 20, 30

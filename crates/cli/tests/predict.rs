@@ -11,25 +11,6 @@ use std::path::Path;
 use hystcomp_io::model_file::ModelFile;
 use serde_json::Value;
 
-/// Reads a CSV written by the binary: the header and the columns.
-fn read_csv(path: &Path) -> (Vec<String>, Vec<Vec<f64>>) {
-    let text = std::fs::read_to_string(path).unwrap();
-    let mut lines = text.lines();
-    let header: Vec<String> = lines
-        .next()
-        .unwrap()
-        .split(',')
-        .map(str::to_owned)
-        .collect();
-    let mut columns = vec![Vec::new(); header.len()];
-    for line in lines {
-        for (c, v) in line.split(',').enumerate() {
-            columns[c].push(v.parse::<f64>().unwrap());
-        }
-    }
-    (header, columns)
-}
-
 /// A record of Table 1 from its reset state: time, volts (0..10 V with reversals) and um.
 fn table1_record(dir: &Path) -> (std::path::PathBuf, Vec<f64>, Vec<f64>) {
     let file = ModelFile::load(&models().join("table1-plant.json")).unwrap();

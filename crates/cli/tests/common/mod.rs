@@ -73,3 +73,22 @@ pub fn dbo_crossval(train: &Path, test: &Path, extra: &[&str]) -> Output {
     args.extend(extra);
     hystcomp(&args)
 }
+
+/// Reads a CSV of numbers written by the binary: the header and the columns.
+pub fn read_csv(path: &Path) -> (Vec<String>, Vec<Vec<f64>>) {
+    let text = std::fs::read_to_string(path).unwrap();
+    let mut lines = text.lines();
+    let header: Vec<String> = lines
+        .next()
+        .unwrap()
+        .split(',')
+        .map(str::to_owned)
+        .collect();
+    let mut columns = vec![Vec::new(); header.len()];
+    for line in lines {
+        for (c, v) in line.split(',').enumerate() {
+            columns[c].push(v.parse::<f64>().unwrap());
+        }
+    }
+    (header, columns)
+}
