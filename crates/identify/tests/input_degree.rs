@@ -2,9 +2,10 @@
 //! polynomial of degree 5, 7 or 9 fitted by least squares under the same invertibility
 //! constraints as the paper's cubic (issue 10).
 
+mod common;
+
 use hystcomp_core::{Compensator, Ihc, InputPolynomial, Mpim, OutputLimits, SolveMode};
 use hystcomp_identify::{IdentifyError, IdentifyOptions, Method, PsoOptions, Warmup, identify};
-use hystcomp_io::data::{Column, ReadOptions, read_columns};
 use hystcomp_io::model_file::ModelFile;
 use rand::{RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
@@ -104,16 +105,10 @@ fn unusable_degrees_and_the_swarm_are_refused() {
 /// the model replaying its drive tracks every reachable desired position).
 #[test]
 fn dbo_degree7_fits_no_worse_round_trips_and_compensates() {
-    let Some(path) = hystcomp_testkit::dbo_record("Model_Vi_Do.dat") else {
+    let Some((v, y)) = common::dbo_record("Model_Vi_Do.dat") else {
         return;
     };
-    let columns = read_columns(
-        &path,
-        &[Column::Index(1), Column::Index(5)],
-        &ReadOptions::default(),
-    )
-    .unwrap();
-    let (v, y) = (&columns.values[0], &columns.values[1]);
+    let (v, y) = (&v, &y);
     let fit = |degree| {
         identify(
             v,

@@ -5,29 +5,18 @@
 //! are about 1.5 times the figures measured when the normalisation became that of the fitted
 //! samples (warm-up excluded), so that a regression of a third shows.
 
+mod common;
+
+use common::dbo_record;
 use hystcomp_identify::{
     CrossvalOptions, IdentifyOptions, Method, NoObserver, PsoOptions, Record, Thresholds, crossval,
     identify,
 };
-use hystcomp_io::data::{Column, ReadOptions, read_columns};
 use hystcomp_io::model_file::Direction;
-
-/// Columns 1 (voltage) and 5 (sensor) of a DBO file, or `None` (with a message) when absent.
-fn record(file: &str) -> Option<(Vec<f64>, Vec<f64>)> {
-    let path = hystcomp_testkit::dbo_record(file)?;
-    let columns = read_columns(
-        &path,
-        &[Column::Index(1), Column::Index(5)],
-        &ReadOptions::default(),
-    )
-    .expect("the DBO file reads");
-    let mut values = columns.values.into_iter();
-    Some((values.next().unwrap(), values.next().unwrap()))
-}
 
 #[test]
 fn dbo_identification_fits_within_sane_bounds() {
-    let Some((v, y)) = record("Model_Vi_Do.dat") else {
+    let Some((v, y)) = dbo_record("Model_Vi_Do.dat") else {
         return;
     };
     // Measured (fit RMS, fit max, hold-out RMS, hold-out max), % of the fitted output range.
@@ -103,8 +92,10 @@ fn dbo_identification_fits_within_sane_bounds() {
 
 #[test]
 fn dbo_crossval_within_sane_bounds() {
-    let (Some((v, y)), Some((tv, ty))) = (record("Model_Vi_Do.dat"), record("Test_Vi_Do_Di.dat"))
-    else {
+    let (Some((v, y)), Some((tv, ty))) = (
+        dbo_record("Model_Vi_Do.dat"),
+        dbo_record("Test_Vi_Do_Di.dat"),
+    ) else {
         return;
     };
     // Measured: plant (RMS, max), inverse (RMS, max), forward (RMS, max), then each replay

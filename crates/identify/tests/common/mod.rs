@@ -75,3 +75,18 @@ pub fn random_plant(rng: &mut impl Rng, n: usize) -> VecMpim {
     )
     .unwrap()
 }
+
+/// Columns 1 (voltage, V) and 5 (sensor, um) of a file of the shared DBO data, or `None` (the
+/// skip said by `hystcomp_testkit`) when the shared data is absent.
+pub fn dbo_record(file: &str) -> Option<(Vec<f64>, Vec<f64>)> {
+    use hystcomp_io::data::{Column, ReadOptions, read_columns};
+    let path = hystcomp_testkit::dbo_record(file)?;
+    let columns = read_columns(
+        &path,
+        &[Column::Index(1), Column::Index(5)],
+        &ReadOptions::default(),
+    )
+    .expect("the DBO file reads");
+    let mut values = columns.values.into_iter();
+    Some((values.next().unwrap(), values.next().unwrap()))
+}
