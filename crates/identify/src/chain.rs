@@ -45,6 +45,9 @@ use crate::{
     NoObserver, ProblemData, Solver, identify,
 };
 
+/// The shortest hold the creep fit on holds uses, s.
+pub const MIN_HOLD_S: f64 = 1.0;
+
 /// The most creep time constants.
 pub const MAX_CREEP_ELEMENTS: usize = hystcomp_core::MAX_CREEP_ELEMENTS;
 /// The largest decimation of the hysteresis-and-creep fit.
@@ -59,7 +62,21 @@ pub struct CreepOptions {
     /// [`FitProblem::with_extra_smoothness`]).
     #[serde(default)]
     pub smoothness: f64,
+    /// Fit the weights on the record's holds alone (where the voltage stays constant for at
+    /// least [`MIN_HOLD_S`]), then the hysteresis on the creep-free displacement, instead of
+    /// both jointly over the whole record (see [`crate::creep_holds`]).
+    #[serde(default)]
+    pub from_holds: bool,
+    /// With [`CreepOptions::from_holds`]: when not empty, the smoothness is chosen among these
+    /// by leaving each hold out in turn (see
+    /// [`crate::creep_holds::creep_weights_from_holds`]), and `smoothness` is ignored. At most
+    /// [`MAX_SMOOTHNESS_CANDIDATES`].
+    #[serde(default)]
+    pub hold_smoothness_candidates: Vec<f64>,
 }
+
+/// The most smoothness candidates of the creep fit on holds.
+pub const MAX_SMOOTHNESS_CANDIDATES: usize = 20;
 
 impl CreepOptions {
     /// `per_decade` time constants per decade from `first_s` to `last_s` (both included when
@@ -75,6 +92,19 @@ impl CreepOptions {
         CreepOptions {
             time_constants_s,
             smoothness: 0.0,
+            from_holds: false,
+            hold_smoothness_candidates: Vec::new(),
+        }
+    }
+
+    /// The same time constants with the weights fitted on the record's holds (see
+    /// [`CreepOptions::from_holds`]), the smoothness chosen among `candidates` by leaving each
+    /// hold out (none: `smoothness` as given).
+    pub fn on_holds(self, candidates: &[f64]) -> CreepOptions {
+        CreepOptions {
+            from_holds: true,
+            hold_smoothness_candidates: candidates.to_vec(),
+            ..self
         }
     }
 
@@ -102,6 +132,23 @@ impl CreepOptions {
             return Err(invalid(
                 "time constants must be positive and increase".to_owned(),
             ));
+        }
+        let c = &self.hold_smoothness_candidates;
+        if c.len() > MAX_SMOOTHNESS_CANDIDATES || c.iter().any(|x| !(x.is_finite() && *x >= 0.0)) {
+            return Err(IdentifyError::InvalidOption {
+                option: "creep smoothness candidates",
+                value: format!("{c:?}"),
+                reason: format!(
+                    "give at most {MAX_SMOOTHNESS_CANDIDATES} finite, non-negative weights"
+                ),
+            });
+        }
+        if !(self.smoothness.is_finite() && self.smoothness >= 0.0) {
+            return Err(IdentifyError::InvalidOption {
+                option: "creep smoothness",
+                value: self.smoothness.to_string(),
+                reason: "give a finite, non-negative weight".to_owned(),
+            });
         }
         if t[0] < 2.0 * period_s {
             return Err(invalid(format!(
@@ -171,8 +218,16 @@ pub struct CreepFit {
     pub part: CreepPart,
     /// `1 / (1 - sum c_i)`: how far a held step creeps in the end.
     pub static_gain: f64,
-    /// The condition number of the joint fit's column-scaled regressors.
+    /// The condition number of the joint fit's column-scaled regressors (of the hysteresis
+    /// fit when the weights come from the holds).
     pub condition_number: f64,
+    /// The smoothness the weights were fitted with.
+    #[serde(default)]
+    pub smoothness: f64,
+    /// Fitted on the record's holds: `(smoothness, leave-one-hold-out RMS %)` of each
+    /// candidate tried (empty otherwise).
+    #[serde(default)]
+    pub smoothness_candidates: Vec<(f64, f64)>,
 }
 
 /// RMS errors of the chain with its links added one by one.
@@ -355,6 +410,19 @@ fn plant_chain(
     let rate = chain.sample_rate_hz;
     let (mut model, creep_fit, mut hysteresis_report) = match &chain.creep {
         None => (base.model.clone(), None, base.report.clone()),
+        Some(creep) if creep.from_holds => {
+            let (model, fit, report) = hold_creep_fit(
+                &v,
+                &delayed,
+                &displacement[..end],
+                options,
+                &base,
+                creep,
+                rate,
+                k,
+            )?;
+            (model, Some(fit), report)
+        }
         Some(creep) => {
             let (model, fit, report) = joint_creep_fit(
                 &v,
@@ -534,6 +602,77 @@ fn joint_creep_fit(
     Ok(best)
 }
 
+/// The creep weights from the record's holds, then the hysteresis from the creep-free
+/// displacement (see [`crate::creep_holds`]); `v` is the decimated voltage, `voltage` and
+/// `displacement` the full-rate record (the voltage delayed by the record's delay).
+#[allow(clippy::too_many_arguments)]
+fn hold_creep_fit(
+    v: &[f64],
+    voltage: &[f64],
+    displacement: &[f64],
+    options: &IdentifyOptions,
+    base: &Identification,
+    creep: &CreepOptions,
+    rate: f64,
+    decimation: usize,
+) -> Result<(ModelFile, CreepFit, FitReport), IdentifyError> {
+    let period = 1.0 / rate;
+    let holds = crate::creep_holds::held_segments(voltage, (MIN_HOLD_S * rate).round() as usize);
+    let y_scale = base.report.output.max - base.report.output.min;
+    let fit = crate::creep_holds::creep_weights_from_holds(
+        displacement,
+        period,
+        decimation,
+        &holds,
+        &creep.time_constants_s,
+        creep.smoothness,
+        &creep.hold_smoothness_candidates,
+        y_scale,
+    )?;
+    let weights = fit.weights;
+    let weight_sum: f64 = weights.iter().sum();
+    let part = CreepPart {
+        origin: displacement[0],
+        time_constants_s: creep.time_constants_s.clone(),
+        weights,
+    };
+    let unusable = |e: String| IdentifyError::InvalidOption {
+        option: "creep time constants",
+        value: format!("{:?}", creep.time_constants_s),
+        reason: format!("the creep fit is unusable ({e}); give fewer or longer time constants"),
+    };
+    let mut inverse = part
+        .link(rate)
+        .map_err(|e| unusable(e.to_string()))?
+        .inverse();
+    let creep_free: Vec<f64> = displacement.iter().map(|y| inverse.step(*y)).collect();
+    let h = decimate(&creep_free, decimation);
+    let hysteresis = identify(v, &h, options)?;
+    let file = hysteresis
+        .model
+        .clone()
+        .with_links(rate, Some(part.clone()), None)
+        .map_err(|e| unusable(e.to_string()))?;
+    let mut report = hysteresis.report.clone();
+    report.detail = format!(
+        "creep ({} elements) on {} holds, then the hysteresis on the creep-free displacement: {}",
+        part.weights.len(),
+        holds.len(),
+        hysteresis.report.detail
+    );
+    Ok((
+        file,
+        CreepFit {
+            part,
+            static_gain: 1.0 / (1.0 - weight_sum),
+            condition_number: hysteresis.report.condition_number,
+            smoothness: fit.smoothness,
+            smoothness_candidates: fit.candidates,
+        },
+        report,
+    ))
+}
+
 /// One joint least-squares fit, the creep elements filtering `source` (normalised, full
 /// rate): the measured displacement, or the model's simulation of it.
 #[allow(clippy::too_many_arguments)]
@@ -651,6 +790,8 @@ fn joint_creep_solve(
             part,
             static_gain: 1.0 / (1.0 - weight_sum),
             condition_number: condition,
+            smoothness: creep.smoothness,
+            smoothness_candidates: Vec::new(),
         },
         hysteresis,
     ))

@@ -68,6 +68,7 @@
 
 pub mod chain;
 mod chain_crossval;
+pub mod creep_holds;
 pub mod crossval;
 pub mod dynamics;
 mod error;

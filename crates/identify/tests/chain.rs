@@ -179,12 +179,16 @@ fn creep_needs_least_squares_and_sane_time_constants() {
     chain.creep = Some(CreepOptions {
         time_constants_s: vec![0.0001, 1.0],
         smoothness: 0.0,
+        from_holds: false,
+        hold_smoothness_candidates: Vec::new(),
     });
     let error = identify_chain(&volts, &um, &IdentifyOptions::default(), &chain).unwrap_err();
     assert!(error.to_string().contains("two sample periods"), "{error}");
     chain.creep = Some(CreepOptions {
         time_constants_s: vec![1.0, 0.5],
         smoothness: 0.0,
+        from_holds: false,
+        hold_smoothness_candidates: Vec::new(),
     });
     assert!(identify_chain(&volts, &um, &IdentifyOptions::default(), &chain).is_err());
     chain.sample_rate_hz = f64::NAN;

@@ -86,6 +86,8 @@ impl ChainArgs {
             Some(t) => CreepOptions {
                 time_constants_s: t.clone(),
                 smoothness: 0.0,
+                from_holds: false,
+                hold_smoothness_candidates: Vec::new(),
             },
             None => {
                 // From 10 ms (or two decimated periods) to a quarter of the record (at most

@@ -44,21 +44,34 @@ pub fn the_full_pipeline_and_the_duration_and_speed_studies_measure_what_they_cl
         "the stage's 800 Hz resonance: {:?}",
         dynamics.modes
     );
-    // The creep weights, smoothed at time constants up to 100 s: none at its floor (a bank to
-    // 1000 s without the smoothing left three of eleven there).
-    let weights = &plant.creep.as_ref().unwrap().part.weights;
+    // The creep weights, fitted on the record's holds at time constants up to 100 s, the
+    // smoothness chosen by leaving each hold out among the candidates (every one scored),
+    // none at its floor.
+    let creep = plant.creep.as_ref().unwrap();
+    let weights = &creep.part.weights;
     assert_eq!(weights.len(), 9, "{weights:?}");
     let largest = weights.iter().copied().fold(0.0, f64::max);
     assert!(weights.iter().all(|w| *w > 0.5 * largest), "{weights:?}");
+    assert_eq!(
+        creep.smoothness_candidates.len(),
+        hystcomp_experiments::full::HOLD_SMOOTHNESS_CANDIDATES.len()
+    );
+    assert!(
+        plant.hysteresis.detail.contains("on 3 holds"),
+        "{}",
+        plant.hysteresis.detail
+    );
     // 20 s: the full IHC beats the exact one (creep), but not the 0.25 % target: the
-    // hysteresis model's mismatch alone leaves 0.27 % (the ablation). Measured 0.269 % (IHC)
-    // and 0.462 % (DIHC).
+    // hysteresis model's mismatch alone leaves 0.255-0.29 % (an MPIM identified on a creep-,
+    // dynamics- and noise-free copy of the stage, examples/full_diag.rs). Measured 0.292 %
+    // (IHC) and 0.453 % (DIHC); 0.269 and 0.462 % when the creep was fitted jointly, which
+    // let it absorb part of the hysteresis mismatch and drift 0.179 um over the hold.
     let full_ihc = full.runs[0].indices.e_rms_percent;
     assert!(full_ihc < exact.runs[0].indices.e_rms_percent);
-    close_to(full_ihc, 0.269, 0.02, "full / ihc e_rms over 20 s");
+    close_to(full_ihc, 0.292, 0.02, "full / ihc e_rms over 20 s");
     close_to(
         full.runs[2].indices.e_rms_percent,
-        0.462,
+        0.453,
         0.03,
         "full / dihc e_rms over 20 s",
     );
@@ -75,7 +88,8 @@ pub fn the_full_pipeline_and_the_duration_and_speed_studies_measure_what_they_cl
     assert!(long("exact / ihc") > 0.7, "{}", long("exact / ihc"));
     assert!(long("full / ihc") <= 0.30, "{}", long("full / ihc"));
     assert_eq!(series("full / ihc").indices.len(), 20);
-    // The held step: the full pipeline removes most of the drift, not all (target 0.1 um).
+    // The held step: with the creep fitted on the record's holds, the drift is within the
+    // target (0.1 um; measured 0.050 um IHC, 0.018 um DIHC; 0.179 / 0.135 um fitted jointly).
     let hold = |label: &str| {
         study
             .duration
@@ -87,8 +101,10 @@ pub fn the_full_pipeline_and_the_duration_and_speed_studies_measure_what_they_cl
     };
     assert!(hold("exact / ihc") > 1.0, "{}", hold("exact / ihc"));
     assert!(hold("full / ihc") < 0.3 * hold("exact / ihc"));
-    close_to(hold("full / ihc"), 0.179, 0.04, "full / ihc drift");
-    close_to(hold("full / dihc"), 0.135, 0.04, "full / dihc drift");
+    assert!(hold("full / ihc") <= 0.1, "{}", hold("full / ihc"));
+    assert!(hold("full / dihc") <= 0.1, "{}", hold("full / dihc"));
+    close_to(hold("full / ihc"), 0.050, 0.03, "full / ihc drift");
+    close_to(hold("full / dihc"), 0.018, 0.03, "full / dihc drift");
     // Speed: the paper's trajectory at 10x (issue 11: <= 0.35 %), better than exact's.
     let paper10 = study
         .speed
@@ -118,18 +134,18 @@ pub fn the_full_pipeline_and_the_duration_and_speed_studies_measure_what_they_cl
     assert!(r_full < 0.5 * raster(&study.speed.raster_strong_amplifier, "exact / ihc"));
     close_to(
         r_full,
-        0.824,
+        0.795,
         0.1,
         "full raster at 100 Hz, strong amplifier",
     );
     close_to(
         raster(&study.speed.raster, "full / ihc"),
-        0.963,
+        0.929,
         0.1,
         "full raster at 100 Hz, built-in amplifier",
     );
     // Every figure of the issue is in the summary, met or not.
     let checks = &summary.beyond.checks;
     assert_eq!(checks.len(), 10, "{checks:?}");
-    assert_eq!(checks.iter().filter(|c| c.passed).count(), 2, "{checks:?}");
+    assert_eq!(checks.iter().filter(|c| c.passed).count(), 4, "{checks:?}");
 }
