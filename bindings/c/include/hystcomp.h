@@ -1593,9 +1593,12 @@ void hystcomp_model_free(struct HystcompModel *m);
 /**
  * Creates the forward model of a model file, in its physical units: for a plant model, drive
  * voltage in and displacement out (the inverse model of a DIHC file maps desired displacement
- * to voltage). The memory starts at zero (eq. (1)).
+ * to voltage). The memory starts at zero (eq. (1)). A model with creep or vibration links is
+ * refused, as by `hystcomp_mpim_from_model`: this handle runs the hysteresis alone; load the
+ * file with `hystcomp_model_load` and run the whole chain with `hystcomp_model_predict`.
  *
- * Fails with `NULL_POINTER`, `IO` (missing file) or `INVALID_MODEL_FILE`.
+ * Fails with `NULL_POINTER`, `IO` (missing file), `INVALID_MODEL_FILE` or `INVALID_ARGUMENT`
+ * (a model with links).
  *
  * # Safety
  * `path` must be a NUL-terminated string or NULL; `out` valid for one write or NULL.

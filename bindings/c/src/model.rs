@@ -495,17 +495,7 @@ pub unsafe extern "C" fn hystcomp_mpim_from_model(
         unsafe { clear_out(out) }?;
         // SAFETY: a live handle or NULL (the caller's contract).
         let model = unsafe { model_arg(m) }?;
-        let file = &model.file;
-        if file.creep.is_some() || file.vibration.is_some() {
-            return Err(Failure::invalid(
-                "the model has creep or vibration links, which a forward MPIM handle would \
-                 leave out; run the whole chain with hystcomp_model_predict",
-            ));
-        }
-        let mpim = HystcompMpim {
-            model: file.model()?,
-            scales: Some((file.input.clone(), file.output.clone())),
-        };
+        let mpim = HystcompMpim::of_file(&model.file)?;
         // SAFETY: `out` was checked non-NULL by `clear_out` and is valid for a write.
         unsafe { put_handle(out, mpim) };
         Ok(())

@@ -8,7 +8,7 @@ use hystcomp_io::model_file::{ModelFile, Scale};
 
 use crate::HystcompStatus;
 use crate::args::{
-    clear_out, handle, non_finite_failure, parameters, path_arg, run_signal, write_out,
+    clear_out, handle, non_finite_failure, parameters, path_arg, put_handle, run_signal, write_out,
 };
 use crate::boundary::{Failure, boundary};
 
@@ -24,11 +24,32 @@ pub struct HystcompMpim {
     pub(crate) scales: Option<(Scale, Scale)>,
 }
 
+impl HystcompMpim {
+    /// The hysteresis of a model file in its physical units; a model with creep or vibration
+    /// links is refused, since this handle would silently leave them out.
+    pub(crate) fn of_file(file: &ModelFile) -> Result<Self, Failure> {
+        if file.creep.is_some() || file.vibration.is_some() {
+            return Err(Failure::invalid(
+                "the model has creep or vibration links, which a forward MPIM handle would \
+                 leave out; run the whole chain with hystcomp_model_predict (a file: \
+                 hystcomp_model_load first)",
+            ));
+        }
+        Ok(Self {
+            model: file.model()?,
+            scales: Some((file.input.clone(), file.output.clone())),
+        })
+    }
+}
+
 /// Creates the forward model of a model file, in its physical units: for a plant model, drive
 /// voltage in and displacement out (the inverse model of a DIHC file maps desired displacement
-/// to voltage). The memory starts at zero (eq. (1)).
+/// to voltage). The memory starts at zero (eq. (1)). A model with creep or vibration links is
+/// refused, as by `hystcomp_mpim_from_model`: this handle runs the hysteresis alone; load the
+/// file with `hystcomp_model_load` and run the whole chain with `hystcomp_model_predict`.
 ///
-/// Fails with `NULL_POINTER`, `IO` (missing file) or `INVALID_MODEL_FILE`.
+/// Fails with `NULL_POINTER`, `IO` (missing file), `INVALID_MODEL_FILE` or `INVALID_ARGUMENT`
+/// (a model with links).
 ///
 /// # Safety
 /// `path` must be a NUL-terminated string or NULL; `out` valid for one write or NULL.
@@ -42,14 +63,9 @@ pub unsafe extern "C" fn hystcomp_mpim_from_model_file(
         unsafe { clear_out(out) }?;
         // SAFETY: NUL-terminated or NULL (the caller's contract).
         let path = unsafe { path_arg(path, "path") }?;
-        let file = ModelFile::load(&path)?;
-        let model = file.model()?;
-        let boxed = Box::into_raw(Box::new(HystcompMpim {
-            model,
-            scales: Some((file.input.clone(), file.output.clone())),
-        }));
+        let mpim = HystcompMpim::of_file(&ModelFile::load(&path)?)?;
         // SAFETY: `out` was checked non-NULL by `clear_out` and is valid for a write.
-        unsafe { out.write(boxed) };
+        unsafe { put_handle(out, mpim) };
         Ok(())
     })
 }

@@ -671,6 +671,15 @@ fn a_model_with_creep_and_vibration_keeps_its_links_and_runs_its_chain() {
     assert_eq!(status, INVALID_ARGUMENT);
     assert!(message.contains("hystcomp_model_predict"), "{message}");
     assert!(mpim.is_null());
+    // So would one made from the file.
+    let mut mpim = std::ptr::dangling_mut::<HystcompMpim>();
+    let c_path = CString::new(path.to_str().unwrap()).unwrap();
+    // SAFETY: a NUL-terminated path and a valid out-pointer.
+    let (status, message) =
+        check(unsafe { hystcomp_mpim_from_model_file(c_path.as_ptr(), &mut mpim) }).unwrap_err();
+    assert_eq!(status, INVALID_ARGUMENT);
+    assert!(message.contains("hystcomp_model_load"), "{message}");
+    assert!(mpim.is_null());
     // Bad links, each refused with its name, before any array is read when a length is wrong.
     let good = values_of(m);
     // NaN time constants, as many as the link's elements: the array must hold the stated
