@@ -3,7 +3,9 @@
 use std::path::PathBuf;
 
 use hystcomp_core::{Mpim as CoreMpim, paper};
-use hystcomp_io::model_file::{Direction, ModelFile as IoModelFile, Scale as IoScale};
+use hystcomp_io::model_file::{
+    Direction, MAX_OPERATORS, ModelFile as IoModelFile, Scale as IoScale,
+};
 use numpy::PyArray1;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
@@ -34,8 +36,9 @@ pub fn parse_direction(direction: &str) -> PyResult<Direction> {
 /// A system object with memory: ``step(x)`` feeds one sample, ``process(x)`` a whole signal
 /// (numpy array in, numpy array out), ``reset()`` returns to zero memory (eq. (1)).
 ///
-/// Raises ``InvalidValueError`` for thresholds and weights of different lengths, negative or
-/// unsorted thresholds, or NaN/infinite parameters.
+/// Raises ``InvalidValueError`` for thresholds and weights of different lengths, more than
+/// 10 000 operators (a model file's limit, as for the compensators), negative or unsorted
+/// thresholds, or NaN/infinite parameters.
 #[pyclass(module = "hystcomp", name = "Mpim")]
 #[derive(Clone)]
 pub struct Mpim {
@@ -49,6 +52,13 @@ impl Mpim {
     fn new(thresholds: ArrayIn<'_>, weights: ArrayIn<'_>, a1: f64, a2: f64) -> PyResult<Self> {
         let thresholds = crate::arrays::values(thresholds);
         let weights = crate::arrays::values(weights);
+        if thresholds.len() > MAX_OPERATORS {
+            return Err(invalid(format!(
+                "thresholds has {} entries: a model holds at most {MAX_OPERATORS} play \
+                 operators (the paper uses 10)",
+                thresholds.len()
+            )));
+        }
         let inner = CoreMpim::new(&thresholds, &weights, a1, a2).map_err(errors::core)?;
         Ok(Mpim { inner })
     }
@@ -349,7 +359,8 @@ impl ModelFile {
         self.inner.save(&path).map_err(errors::model_file)
     }
 
-    /// The MPIM of this file (normalised units, zero memory).
+    /// The MPIM of this file (normalised units, zero memory): the hysteresis alone, without
+    /// the file's creep or vibration links (``predict`` runs the whole chain).
     fn model(&self) -> PyResult<Mpim> {
         Ok(Mpim {
             inner: self.inner.model().map_err(errors::model_file)?,

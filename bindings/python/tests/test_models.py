@@ -93,6 +93,13 @@ def test_nan_input_is_refused_and_memory_untouched():
         ([0.0, 0.1], [0.2, 0.1], np.inf, 1.0, "a1 is NaN or infinite"),
         ([-0.1, 0.1], [0.2, 0.1], 0.0, 1.0, "negative"),
         ([0.2, 0.1], [0.2, 0.1], 0.0, 1.0, "sort the operators"),
+        (
+            np.linspace(0.0, 1.0, 10_001),
+            np.full(10_001, 1e-4),
+            0.0,
+            1.0,
+            "thresholds has 10001 entries: a model holds at most 10000",
+        ),
     ],
 )
 def test_invalid_parameters_are_refused_with_the_reason(thresholds, weights, a1, a2, message):

@@ -29,8 +29,9 @@ class Mpim:
     A system object with memory: ``step(x)`` feeds one sample, ``process(x)`` a whole signal
     (numpy array in, numpy array out), ``reset()`` returns to zero memory (eq. (1)).
 
-    Raises ``InvalidValueError`` for thresholds and weights of different lengths, negative or
-    unsorted thresholds, or NaN/infinite parameters."""
+    Raises ``InvalidValueError`` for thresholds and weights of different lengths, more than
+    10 000 operators (a model file's limit, as for the compensators), negative or unsorted
+    thresholds, or NaN/infinite parameters."""
 
     def __init__(self, thresholds: ArrayLike, weights: ArrayLike, a1: float, a2: float) -> None:
         """``y = a1 x^3 + a2 x + sum b_i F_{r_i}[x]``: thresholds ``r_i`` (non-negative,
@@ -145,7 +146,8 @@ class ModelFile:
     def save(self, path: PathLike) -> None:
         """Writes the file atomically (a temporary file, then a rename)."""
     def model(self) -> Mpim:
-        """The MPIM of this file (normalised units, zero memory)."""
+        """The MPIM of this file (normalised units, zero memory): the hysteresis alone, without
+        the file's creep or vibration links (``predict`` runs the whole chain)."""
     def predict(self, inputs: ArrayLike) -> FloatArray:
         """The model's output, in physical units, for a whole input signal in physical units
         (e.g. volts in, micrometres out for a plant model), from zero memory. Raises
