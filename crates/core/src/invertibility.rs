@@ -229,7 +229,11 @@ pub(crate) fn delayed_gain_range<T: Real>(
     model_checkpoints(thresholds, weights, input, lo, hi, |k, x, prefix| {
         let q = match which {
             DelayedLoop::Wihc => (input.remainder_slope(x) + prefix) / a2,
-            DelayedLoop::Ihc => input.remainder_slope(x) / (a2 + prefix),
+            // A branch whose PI slope is not positive has no inverse (eq. (7) divides by it):
+            // no delayed IHC exists there, so its gain is NaN, not a finite `|q|` of a
+            // meaningless sign (the constructors refuse such a model as not invertible).
+            DelayedLoop::Ihc if a2 + prefix > T::zero() => input.remainder_slope(x) / (a2 + prefix),
+            DelayedLoop::Ihc => T::nan(),
         };
         let gain = q.abs();
         // NaN (a2 = 0, or a PI part with zero slope) must not hide: it compares false.

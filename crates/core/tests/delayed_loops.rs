@@ -127,8 +127,9 @@ fn worst_reachable_branch(seed: u64, n: usize, lo: f64, width: f64) -> Result<()
     for (name, gain, grid) in [("ihc", ihc, grid_ihc), ("wihc", wihc, grid_wihc)] {
         if !grid.is_finite() {
             // A PI part with a zero or negative slope on a reachable branch: no IHC to speak
-            // of (see above), and the constructors say so.
+            // of (see above), and the core's gain and the constructors say so.
             prop_assert!(name == "ihc", "{}: grid {}", name, grid);
+            prop_assert!(gain.gain.is_nan(), "{}: {:?} for grid {}", name, gain, grid);
             let limits = OutputLimits::new(lo.min(0.0), hi.max(0.0)).unwrap();
             prop_assert!(
                 matches!(
