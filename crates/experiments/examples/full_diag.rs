@@ -1,6 +1,18 @@
 //! Diagnosis of the `full` pipeline (issue 11): the model compared link by link with diagnostic
 //! copies of the stage (creep, dynamics, noise switched off), on the study's runs.
 //! Not part of the study; `cargo run --release -p hystcomp-experiments --example full_diag`.
+//!
+//! Arguments `key=value` change the pipeline (`smooth`, `first`, `last`, `per`: the creep
+//! bank; `holds=1` and `auto=1`: weights on the holds, smoothness chosen; `ops`, `iops`, `oe`,
+//! `res`, `delay`; the excitation's `hold`, `hold2`, `step`, `rest`, `vibamp`, `vibs`).
+//! Environment: `JOINT=1` the joint creep fit; `STUDY=1` runs the whole study and prints issue
+//! 11's summary; `FLOOR=1` identifies hysteresis-only MPIMs on the creep-, dynamics- and
+//! noise-free copy (`POWER=p`: thresholds `(i/n)^p`) and writes its n = 10 model to
+//! `/tmp/creep-mpim-stage.json`, which `STAGEHYST=mpim` then makes the stage's hysteresis;
+//! `STAGECREEP=off|log100|log1000|kv` changes the diagnostic stage's creep law; `DUMP=run`
+//! writes a run's error to `/tmp`. Diagnostic copies of the stage are for diagnosis only.
+
+#![allow(clippy::needless_range_loop)]
 
 use hystcomp_experiments::chain_excitation::ChainExcitation;
 use hystcomp_experiments::excitation::IdentificationExcitation;
@@ -36,11 +48,16 @@ fn base_stage() -> StageConfig {
     match std::env::var("STAGECREEP").as_deref() {
         Ok("log100") => s.creep.longest_time_constant_s = 100.0,
         Ok("log1000") => s.creep.longest_time_constant_s = 1000.0,
+        Ok("off") => s.creep.percent_per_decade = 0.0,
         Ok("kv") => {
             s.creep.law = hystcomp_stage::CreepLaw::KelvinVoigt;
             s.creep.decades = 4;
         }
         _ => {}
+    }
+    if std::env::var("STAGEHYST").as_deref() == Ok("mpim") {
+        s.hysteresis.model = hystcomp_stage::HysteresisModel::Mpim;
+        s.hysteresis.mpim.model_file = Some("/tmp/creep-mpim-stage.json".into());
     }
     s
 }
@@ -102,6 +119,79 @@ fn compare(name: &str, plant: &ModelFile, inverse: &ModelFile, desired: &[f64], 
         let quiet = run(&v.quiet, 2, &cmd);
         let no_dyn = run(&v.no_dyn, 2, &cmd);
         let no_dc = run(&v.no_dyn_creep, 2, &cmd);
+        let err: Vec<f64> = real[from..]
+            .iter()
+            .zip(&desired[from..])
+            .map(|(a, b)| a - b)
+            .collect();
+        let mean = err.iter().sum::<f64>() / err.len() as f64;
+        if std::env::var("DUMP").as_deref() == Ok(name) {
+            let text: String = err
+                .iter()
+                .zip(&desired[from..])
+                .map(|(e, y)| format!("{y:.5},{e:.5}\n"))
+                .collect();
+            std::fs::write(format!("/tmp/creep-{name}-{label}.csv"), text).unwrap();
+        }
+        {
+            // err ~ c0 + c1 y_d + c2 dy_d/dt (s): gain error c1, delay -c2.
+            let n = err.len();
+            let yd = &desired[from..];
+            let rate_hz = plant.sample_rate_hz.unwrap();
+            let dyd: Vec<f64> = (0..n)
+                .map(|k| {
+                    let a = yd[k.saturating_sub(1)];
+                    let b = yd[(k + 1).min(n - 1)];
+                    (b - a) * rate_hz / 2.0
+                })
+                .collect();
+            let cols = |r: usize| [1.0, yd[r], dyd[r]];
+            let mut m = [[0.0f64; 4]; 3];
+            for r in 0..n {
+                let c = cols(r);
+                for i in 0..3 {
+                    for j in 0..3 {
+                        m[i][j] += c[i] * c[j];
+                    }
+                    m[i][3] += c[i] * err[r];
+                }
+            }
+            for i in 0..3 {
+                let p = m[i][i];
+                for j in 0..4 {
+                    m[i][j] /= p;
+                }
+                for k in 0..3 {
+                    if k != i {
+                        let f = m[k][i];
+                        for j in 0..4 {
+                            m[k][j] -= f * m[i][j];
+                        }
+                    }
+                }
+            }
+            let sol = [m[0][3], m[1][3], m[2][3]];
+            let resid: f64 = (0..n)
+                .map(|r| {
+                    let c = cols(r);
+                    (err[r] - sol[0] * c[0] - sol[1] * c[1] - sol[2] * c[2]).powi(2)
+                })
+                .sum::<f64>();
+            let resid_pct = 100.0 * (resid / n as f64).sqrt() / span;
+            println!(
+                "   error = {:.4} + {:.5} y_d + {:.2} us * dy_d/dt; residual {:.3} %",
+                sol[0],
+                sol[1],
+                sol[2] * 1e6,
+                resid_pct
+            );
+        }
+        println!(
+            "   error mean {:.3} % of the range, about the mean {:.3} %",
+            100.0 * mean / span,
+            100.0 * (err.iter().map(|e| (e - mean).powi(2)).sum::<f64>() / err.len() as f64).sqrt()
+                / span
+        );
         println!(
             "{name} {label}: tracking real {:.3} quiet {:.3} | stage ablated tracking: no-dyn {:.3} no-dyn-no-creep {:.3}",
             pct(&real, desired),
@@ -220,6 +310,8 @@ fn main() {
             "oe" => options.output_error_iterations = x as usize,
             "hold" => excitation.hold_s = x,
             "hold2" => excitation.second_hold_s = x,
+            "step" => excitation.step_s = x,
+            "rest" => excitation.rest_s = x,
             "res" => options.dynamics.max_resonances = x as usize,
             "delay" => options.dynamics.max_delay_samples = x as usize,
             "vibamp" => excitation.vibration_amplitude = x,
@@ -290,15 +382,28 @@ fn main() {
         let v = variants();
         let clean = run(&v.no_dyn_creep, 1, &cmd);
         let desired = Signal::paper(1.0, 20.0, fs).sample().unwrap();
+        let power: f64 = std::env::var("POWER")
+            .ok()
+            .and_then(|p| p.parse().ok())
+            .unwrap_or(1.0);
         for n in [8, 10, 12, 15, 20, 30] {
             for end in [n0, n0 + segs.vibration.start] {
                 let o = IdentifyOptions {
-                    thresholds: Thresholds::Uniform(n),
+                    thresholds: if power == 1.0 {
+                        Thresholds::Uniform(n)
+                    } else {
+                        Thresholds::Given(
+                            (0..n).map(|i| (i as f64 / n as f64).powf(power)).collect(),
+                        )
+                    },
                     ..base.clone()
                 };
                 let vv: Vec<f64> = cmd[..end].iter().step_by(10).copied().collect();
                 let yy: Vec<f64> = clean[..end].iter().step_by(10).copied().collect();
                 let id = hystcomp_identify::identify(&vv, &yy, &o).unwrap();
+                if n == 10 && end > n0 {
+                    std::fs::write("/tmp/creep-mpim-stage.json", id.model.to_json()).unwrap();
+                }
                 let c = command(&id.model, Method::Ihc, &desired, full_scale);
                 let m = run(&v.no_dyn_creep, 2, &c);
                 let h = desired.len() / 2;
@@ -380,8 +485,15 @@ fn main() {
     }
     if let Some(d) = &r.dynamics {
         println!(
-            "dynamics order {:?} modes {:?} delay {} with {:.4} without {:.4}",
-            d.order, d.modes, d.part.delay_samples, d.rms_with, d.rms_without
+            "dynamics order {:?} modes {:?} delay {} with {:.4} without {:.4}\n  candidates {:?}\n  b {:?} a {:?}",
+            d.order,
+            d.modes,
+            d.part.delay_samples,
+            d.rms_with,
+            d.rms_without,
+            d.candidates,
+            d.part.numerator,
+            d.part.denominator
         );
     }
     println!("inverse contributions {:?}", inverse.report.contributions);
