@@ -1483,6 +1483,31 @@ fn matrix() -> Vec<(Fixture, Case)> {
         )
         .output(f.path("signal.csv"))
     });
+    // Huge and tiny values are echoed as written (1e308), not digit by digit.
+    for (name, args, fragments) in [
+        (
+            "signal at 1e308 Hz",
+            ["triangle", "--frequency", "1e308"],
+            ["--frequency", "got 1e308"],
+        ),
+        (
+            "signal of 1e308 s",
+            ["paper", "--duration", "1e308"],
+            ["--duration", "1e308 s at"],
+        ),
+        (
+            "signal sampled at 1e-300 Hz",
+            ["paper", "--sample-rate", "1e-300"],
+            ["--duration", "at 1e-300 Hz"],
+        ),
+    ] {
+        add(&|f| {
+            let mut line = vec!["signal".to_owned()];
+            line.extend(args.map(str::to_owned));
+            line.extend(["-o".to_owned(), f.arg("signal.csv")]);
+            Case::refused(name, line, 1, &fragments).output(f.path("signal.csv"))
+        });
+    }
     let learn = |f: &Fixture, extra: &[&str]| -> Vec<String> {
         let mut args: Vec<String> = [
             "learn",
@@ -1505,6 +1530,15 @@ fn matrix() -> Vec<(Fixture, Case)> {
             learn(f, &["--gain", "NaN"]),
             1,
             &["--gain", "NaN"],
+        )
+        .output(f.path("next.csv"))
+    });
+    add(&|f| {
+        Case::refused(
+            "learn with a gain of 1e308",
+            learn(f, &["--gain", "1e308"]),
+            1,
+            &["--gain", "gain = 1e308 cannot"],
         )
         .output(f.path("next.csv"))
     });

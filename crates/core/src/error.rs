@@ -1,5 +1,6 @@
 //! The one error type of the core.
 
+use crate::Shown;
 use core::fmt;
 
 /// Why a model, a compensator or a call was refused. Values are reported as `f64` whatever the
@@ -182,7 +183,8 @@ impl fmt::Display for CoreError {
             }
             CoreError::NegativeThreshold { index, value } => write!(
                 f,
-                "threshold r[{index}] = {value} is negative; play-operator thresholds must be >= 0 (eqs. (1)-(2))"
+                "threshold r[{index}] = {} is negative; play-operator thresholds must be >= 0 (eqs. (1)-(2))",
+                Shown(*value)
             ),
             CoreError::UnsortedThresholds { index } => write!(
                 f,
@@ -260,12 +262,16 @@ impl fmt::Display for CoreError {
                 what,
                 index: Some(i),
                 value,
-            } => write!(f, "{what}[{i}] = {value} must be positive and finite"),
+            } => write!(
+                f,
+                "{what}[{i}] = {} must be positive and finite",
+                Shown(*value)
+            ),
             CoreError::NotPositive {
                 what,
                 index: None,
                 value,
-            } => write!(f, "{what} = {value} must be positive and finite"),
+            } => write!(f, "{what} = {} must be positive and finite", Shown(*value)),
             CoreError::CreepUnstable { weight_sum } => write!(
                 f,
                 "the creep weights sum to {weight_sum:.6} in absolute value; below 1 is needed \

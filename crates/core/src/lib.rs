@@ -61,6 +61,7 @@ mod real;
 #[cfg(feature = "alloc")]
 pub mod reference;
 mod roots;
+mod shown;
 mod solve;
 mod vibration;
 mod walk;
@@ -84,6 +85,7 @@ pub use mpim::Mpim;
 pub use play::{OneSidedPlay, SymmetricPlay};
 pub use polynomial::{InputPolynomial, MAX_INPUT_DEGREE};
 pub use real::Real;
+pub use shown::Shown;
 pub use vibration::{
     MAX_DELAY_SAMPLES, MAX_PREVIEW_SAMPLES, MAX_VIBRATION_ORDER, STATIC_GAIN_TOLERANCE,
     TAIL_TOLERANCE, Vibration, VibrationInverse,

@@ -1,5 +1,6 @@
 //! What to identify and how: direction, solver, thresholds, warm-up, hold-out, output offset.
 
+use hystcomp_core::Shown;
 use hystcomp_io::model_file::Direction;
 use serde::{Deserialize, Serialize};
 
@@ -285,7 +286,7 @@ impl IdentifyOptions {
         {
             return Err(IdentifyError::InvalidOption {
                 option: "delayed loop bound",
-                value: bound.to_string(),
+                value: Shown(bound).to_string(),
                 reason: "the delayed loops' gain bound must lie strictly between 0 and 1"
                     .to_owned(),
             });
@@ -293,14 +294,14 @@ impl IdentifyOptions {
         if !(self.holdout.is_finite() && (0.0..1.0).contains(&self.holdout)) {
             return Err(IdentifyError::InvalidOption {
                 option: "holdout",
-                value: self.holdout.to_string(),
+                value: Shown(self.holdout).to_string(),
                 reason: "the hold-out is a fraction of the samples in [0, 1), e.g. 0.2".to_owned(),
             });
         }
         if !(self.margin.is_finite() && self.margin > 0.0 && self.margin < 1.0) {
             return Err(IdentifyError::InvalidOption {
                 option: "margin",
-                value: self.margin.to_string(),
+                value: Shown(self.margin).to_string(),
                 reason: "the slope margin is a small positive slope in normalised units, in \
                          (0, 1); the default is 0.001"
                     .to_owned(),
@@ -309,7 +310,7 @@ impl IdentifyOptions {
         if !(self.max_condition.is_finite() && self.max_condition > 1.0) {
             return Err(IdentifyError::InvalidOption {
                 option: "max-condition",
-                value: self.max_condition.to_string(),
+                value: Shown(self.max_condition).to_string(),
                 reason: "give a condition number > 1, e.g. 1e10".to_owned(),
             });
         }
@@ -317,7 +318,7 @@ impl IdentifyOptions {
             if !(limit.is_finite() && limit > 0.0) {
                 return Err(IdentifyError::InvalidOption {
                     option: "largest fit RMS",
-                    value: limit.to_string(),
+                    value: Shown(limit).to_string(),
                     reason: "give a positive percentage of the output range (the default is 10)"
                         .to_owned(),
                 });
@@ -327,7 +328,7 @@ impl IdentifyOptions {
             if !v.is_finite() {
                 return Err(IdentifyError::InvalidOption {
                     option: "offset",
-                    value: v.to_string(),
+                    value: Shown(v).to_string(),
                     reason: "give fit, none or a finite number".to_owned(),
                 });
             }

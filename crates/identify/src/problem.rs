@@ -79,6 +79,7 @@
 //! `e_j >= margin / EXTRA_ROW_SCALE` (1e-6 with the default margin): the rows share the
 //! margin of the others, and the scale makes the bound zero for practical purposes.
 
+use hystcomp_core::Shown;
 use std::ops::Range;
 
 use hystcomp_core::{OneSidedPlay, branch_checkpoints, branch_intervals};
@@ -459,7 +460,7 @@ impl FitProblem {
         if !(bound > 0.0 && bound < 1.0) {
             return Err(IdentifyError::InvalidOption {
                 option: "delayed loop bound",
-                value: bound.to_string(),
+                value: Shown(bound).to_string(),
                 reason: "the delayed loops' gain bound must lie strictly between 0 and 1"
                     .to_owned(),
             });
@@ -485,7 +486,7 @@ impl FitProblem {
         if !(lambda.is_finite() && lambda >= 0.0) {
             return Err(IdentifyError::InvalidOption {
                 option: "creep smoothness",
-                value: lambda.to_string(),
+                value: Shown(lambda).to_string(),
                 reason: "give a finite, non-negative weight".to_owned(),
             });
         }

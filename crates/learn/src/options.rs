@@ -1,5 +1,6 @@
 //! What the learning update is asked to do, every value bounded before anything is allocated.
 
+use hystcomp_core::Shown;
 use hystcomp_indices::DEFAULT_MHE_BINS;
 use serde::{Deserialize, Serialize};
 
@@ -103,14 +104,14 @@ impl LearningOptions {
         if !(fs.is_finite() && fs > 0.0 && fs <= 1e7) {
             return bad(
                 "sample rate",
-                fs.to_string(),
+                Shown(fs).to_string(),
                 "give the records' sample rate in Hz, above 0 and at most 1e7".into(),
             );
         }
         if !(self.gain.is_finite() && self.gain > 0.0 && self.gain <= MAX_GAIN) {
             return bad(
                 "gain",
-                self.gain.to_string(),
+                Shown(self.gain).to_string(),
                 format!(
                     "give a learning gain above 0 and at most {MAX_GAIN} (default {DEFAULT_GAIN})"
                 ),
@@ -120,7 +121,7 @@ impl LearningOptions {
             if !(fc.is_finite() && fc > 0.0 && fc <= fs / 2.0) {
                 return bad(
                     "bandwidth",
-                    fc.to_string(),
+                    Shown(fc).to_string(),
                     format!(
                         "give a cut-off in Hz above 0 and at most half the sample rate ({})",
                         fs / 2.0
@@ -146,7 +147,7 @@ impl LearningOptions {
         if !(d.is_finite() && d > 1.0 && d <= MAX_DIVERGENCE_FACTOR) {
             return bad(
                 "divergence factor",
-                d.to_string(),
+                Shown(d).to_string(),
                 format!(
                     "give a factor above 1 and at most {MAX_DIVERGENCE_FACTOR} (default {DEFAULT_DIVERGENCE_FACTOR})"
                 ),

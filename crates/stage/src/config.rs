@@ -6,6 +6,7 @@
 //! beside this crate lists every field with its unit, default and source, and `STAGE.md`
 //! explains the sources and the calibration.
 
+use hystcomp_core::Shown;
 use std::path::Path;
 
 use serde::{Deserialize, Serialize};
@@ -354,7 +355,7 @@ fn finite(field: &'static str, x: f64) -> Result<f64, StageError> {
     if x.is_finite() {
         Ok(x)
     } else {
-        Err(StageError::invalid(field, "a finite number", x))
+        Err(StageError::invalid(field, "a finite number", Shown(x)))
     }
 }
 
@@ -363,7 +364,7 @@ fn positive(field: &'static str, x: f64) -> Result<(), StageError> {
     if finite(field, x)? > 0.0 && x.is_normal() {
         Ok(())
     } else {
-        Err(StageError::invalid(field, "> 0", x))
+        Err(StageError::invalid(field, "> 0", Shown(x)))
     }
 }
 
@@ -371,7 +372,7 @@ fn within(field: &'static str, x: f64, lo: f64, hi: f64, text: &str) -> Result<(
     if (lo..=hi).contains(&finite(field, x)?) {
         Ok(())
     } else {
-        Err(StageError::invalid(field, text.to_string(), x))
+        Err(StageError::invalid(field, text.to_string(), Shown(x)))
     }
 }
 
@@ -386,7 +387,7 @@ fn ordered(field: &'static str, lo: f64, hi: f64) -> Result<(), StageError> {
         Err(StageError::invalid(
             field,
             "increasing (lower limit below upper limit), with a span of ordinary size",
-            format!("[{lo}, {hi}]"),
+            format!("[{}, {}]", Shown(lo), Shown(hi)),
         ))
     }
 }

@@ -5,6 +5,7 @@
 //! (exactly as the stage does, without the stack's mechanics) over the command and reports
 //! what it asked and what it got.
 
+use hystcomp_core::Shown;
 use serde::Serialize;
 
 use crate::amplifier::Amplifier;
@@ -102,7 +103,7 @@ pub fn feasibility_held(
         return Err(StageError::invalid(
             "the command's sample period (s)",
             "a positive, finite number of seconds",
-            period_s,
+            Shown(period_s),
         ));
     }
     let gain = config.amplifier.gain;

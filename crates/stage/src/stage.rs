@@ -1,5 +1,6 @@
 //! The whole stage: DAC -> amplifier -> hysteresis -> creep -> mechanics -> sensor -> ADC.
 
+use hystcomp_core::Shown;
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use rand_distr::{Distribution, Normal};
@@ -107,7 +108,11 @@ impl Stage {
         let sigma_um = sensor.noise_rms_nm * 1e-3;
         let noise = if sigma_um > 0.0 {
             Some(Normal::new(0.0, sigma_um).map_err(|_| {
-                StageError::invalid("sensor.noise_rms_nm", "a valid RMS", sensor.noise_rms_nm)
+                StageError::invalid(
+                    "sensor.noise_rms_nm",
+                    "a valid RMS",
+                    Shown(sensor.noise_rms_nm),
+                )
             })?)
         } else {
             None

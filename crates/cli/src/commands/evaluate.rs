@@ -1,5 +1,6 @@
 //! `hystcomp evaluate`: the tracking indices of section 4.3 for any pair of records.
 
+use hystcomp_core::Shown;
 use std::path::PathBuf;
 
 use hystcomp_experiments::TrackingIndices;
@@ -134,7 +135,8 @@ fn last_period(values: &[Vec<f64>], period: f64, has_time: bool) -> Result<usize
     }
     if !(period.is_finite() && period > 0.0) {
         return Err(CliError::input(format!(
-            "--period must be a positive number of seconds, got {period}"
+            "--period must be a positive number of seconds, got {}",
+            Shown(period)
         )));
     }
     let t = &values[1];

@@ -1,5 +1,6 @@
 //! `hystcomp identify`: measured (voltage, displacement) samples in, a model file out.
 
+use hystcomp_core::Shown;
 use std::path::{Path, PathBuf};
 
 use hystcomp_identify::{
@@ -544,9 +545,10 @@ impl FitArgs {
                 ] {
                     if !(value.is_finite() && value > 0.0) {
                         return Err(CliError::input(format!(
-                            "{option} {value} is not usable: give a positive search bound in \
+                            "{option} {} is not usable: give a positive search bound in \
                              normalised units (the defaults are 3 for --bound, 1 for \
-                             --offset-bound)"
+                             --offset-bound)",
+                            Shown(value)
                         )));
                     }
                 }

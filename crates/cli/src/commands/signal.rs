@@ -2,6 +2,7 @@
 //! `hystcomp_experiments::signals` and the study's identification excitation, so that every
 //! input of the README's session can be made on the command line.
 
+use hystcomp_core::Shown;
 use std::path::PathBuf;
 
 use clap::ValueEnum;
@@ -317,7 +318,9 @@ fn check_range(option: &str, value: f64, lo: f64, hi: f64) -> Result<(), CliErro
         Ok(())
     } else {
         Err(CliError::input(format!(
-            "{option} must be above {lo} and at most {hi}, got {value}"
+            "{option} must be above {lo} and at most {}, got {}",
+            Shown(hi),
+            Shown(value)
         )))
     }
 }

@@ -10,6 +10,7 @@
 //! The phase is 0 at the start, so a chirp starts at its offset (with the velocity of its first
 //! frequency); its frequencies scale with the signal's speed factor.
 
+use hystcomp_core::Shown;
 use std::f64::consts::PI;
 
 use serde::{Deserialize, Serialize};
@@ -55,7 +56,7 @@ impl Chirp {
                 };
                 return Err(SignalError::new(
                     name,
-                    format!("must be {what}, {MAX_CHIRP_HZ}] Hz, got {f}"),
+                    format!("must be {what}, {MAX_CHIRP_HZ}] Hz, got {}", Shown(f)),
                 ));
             }
         }

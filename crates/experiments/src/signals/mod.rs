@@ -42,6 +42,7 @@ pub mod paper;
 pub mod raster;
 pub mod steps;
 
+use hystcomp_core::Shown;
 use std::fmt;
 
 use serde::{Deserialize, Serialize};
@@ -157,7 +158,7 @@ impl Signal {
             } else {
                 Err(SignalError::new(
                     name,
-                    format!("must be finite, got {value}"),
+                    format!("must be finite, got {}", Shown(value)),
                 ))
             }
         };
@@ -166,7 +167,7 @@ impl Signal {
         if !(self.speed > 0.0 && self.speed <= MAX_SPEED) {
             return Err(SignalError::new(
                 "speed",
-                format!("must be in (0, {MAX_SPEED}], got {}", self.speed),
+                format!("must be in (0, {MAX_SPEED}], got {}", Shown(self.speed)),
             ));
         }
         if !(self.sample_rate_hz > 0.0 && self.sample_rate_hz <= MAX_SAMPLE_RATE_HZ) {
@@ -174,14 +175,17 @@ impl Signal {
                 "sample_rate_hz",
                 format!(
                     "must be in (0, {MAX_SAMPLE_RATE_HZ}] Hz, got {}",
-                    self.sample_rate_hz
+                    Shown(self.sample_rate_hz)
                 ),
             ));
         }
         if !(self.duration_s > 0.0 && self.duration_s.is_finite()) {
             return Err(SignalError::new(
                 "duration_s",
-                format!("must be positive and finite, got {} s", self.duration_s),
+                format!(
+                    "must be positive and finite, got {} s",
+                    Shown(self.duration_s)
+                ),
             ));
         }
         let samples = self.duration_s * self.sample_rate_hz;
@@ -190,9 +194,9 @@ impl Signal {
                 "duration_s",
                 format!(
                     "{} s at {} Hz is {} samples; between 1 and {MAX_SAMPLES} are allowed",
-                    self.duration_s,
-                    self.sample_rate_hz,
-                    samples.round()
+                    Shown(self.duration_s),
+                    Shown(self.sample_rate_hz),
+                    Shown(samples.round())
                 ),
             ));
         }
@@ -270,7 +274,7 @@ pub(crate) fn check_range(
     } else {
         Err(SignalError::new(
             parameter,
-            format!("must be in [{lo}, {hi}]{unit}, got {value}"),
+            format!("must be in [{lo}, {hi}]{unit}, got {}", Shown(value)),
         ))
     }
 }

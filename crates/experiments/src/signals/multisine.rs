@@ -13,6 +13,7 @@
 //! golden-section refinement of the best local extrema), and the shape is `(m - centre) /
 //! half_range`. The refinement finds the extrema to about 1e-9 of the sum's range.
 
+use hystcomp_core::Shown;
 use std::f64::consts::PI;
 
 use serde::{Deserialize, Serialize};
@@ -79,7 +80,10 @@ impl Multisine {
         if !(fundamental_hz > 0.0 && fundamental_hz <= MAX_FUNDAMENTAL_HZ) {
             return Err(SignalError::new(
                 "fundamental_hz",
-                format!("must be in (0, {MAX_FUNDAMENTAL_HZ}] Hz, got {fundamental_hz}"),
+                format!(
+                    "must be in (0, {MAX_FUNDAMENTAL_HZ}] Hz, got {}",
+                    Shown(fundamental_hz)
+                ),
             ));
         }
         if tones.is_empty() || tones.len() > MAX_TONES {

@@ -14,6 +14,7 @@
 //! one spans exactly -1 .. +1. The raster starts at the centre of its lowest corner (-1, at
 //! rest) at nominal time 0.
 
+use hystcomp_core::Shown;
 use serde::{Deserialize, Serialize};
 
 use super::{SignalError, check_range};
@@ -60,14 +61,14 @@ impl Raster {
                 "frequency_hz",
                 format!(
                     "must be in (0, {MAX_RASTER_HZ}] Hz, got {}",
-                    self.frequency_hz
+                    Shown(self.frequency_hz)
                 ),
             ));
         }
         if !(self.rise_fraction > 0.0 && self.rise_fraction < 1.0) {
             return Err(SignalError::new(
                 "rise_fraction",
-                format!("must be in (0, 1), got {}", self.rise_fraction),
+                format!("must be in (0, 1), got {}", Shown(self.rise_fraction)),
             ));
         }
         // A hair of tolerance, so that 1 - 0.9 (0.09999999999999998) admits a rounding of 0.1.

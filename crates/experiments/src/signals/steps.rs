@@ -7,6 +7,7 @@
 //! level is held to the end of the signal, however long; a signal shorter than the sequence
 //! stops part-way. Times are nominal (divided by the signal's speed factor in real time).
 
+use hystcomp_core::Shown;
 use std::f64::consts::PI;
 
 use serde::{Deserialize, Serialize};
@@ -56,7 +57,7 @@ impl Steps {
         if !(self.hold_s > 0.0 && self.hold_s.is_finite()) {
             return Err(SignalError::new(
                 "hold_s",
-                format!("must be positive and finite, got {} s", self.hold_s),
+                format!("must be positive and finite, got {} s", Shown(self.hold_s)),
             ));
         }
         check_range("transition_s", self.transition_s, 0.0, 1e9, " s")
