@@ -73,13 +73,20 @@ pub struct HoldFit {
     pub candidates: Vec<(f64, f64)>,
 }
 
-/// The least-squares rows of the hold fit, normalised by the output range: one indicator
-/// column per hold, then one per element.
+/// One hold's rows of the least squares, compressed: with `A_j = Q_j R_j` over its indicator
+/// and element columns, `||b_j - A_j x||^2 = ||d_j - R_j x||^2 + rest_j` (`d_j = Q_j^T b_j`),
+/// so that any set of holds is fitted, and any hold scored, on a few rows.
+struct HoldBlock {
+    r: DMatrix<f64>,
+    d: DVector<f64>,
+    rest: f64,
+    rows: usize,
+}
+
+/// The least-squares rows of the hold fit, normalised by the output range, one compressed
+/// block per hold: its indicator column, then one per element.
 struct HoldRows {
-    a: DMatrix<f64>,
-    b: DVector<f64>,
-    hold_of_row: Vec<usize>,
-    holds: usize,
+    blocks: Vec<HoldBlock>,
     elements: usize,
 }
 
@@ -129,48 +136,66 @@ impl HoldRows {
                     .collect()
             })
             .collect();
-        let rows: Vec<(usize, usize)> = holds
+        let blocks = holds
             .iter()
-            .enumerate()
-            .flat_map(|(j, h)| h.clone().step_by(decimation.max(1)).map(move |k| (j, k)))
+            .map(|h| {
+                let samples: Vec<usize> = h.clone().step_by(decimation.max(1)).collect();
+                let n = samples.len();
+                let a = DMatrix::<f64>::from_fn(n, m + 1, |r, c| {
+                    if c == 0 {
+                        1.0
+                    } else {
+                        columns[c - 1][samples[r]]
+                    }
+                });
+                let b = DVector::<f64>::from_iterator(
+                    n,
+                    samples.iter().map(|&k| (displacement[k] - first) / scale),
+                );
+                let qr = a.qr();
+                let d = qr.q().transpose() * &b;
+                let rest = (b.norm_squared() - d.norm_squared()).max(0.0);
+                HoldBlock {
+                    r: qr.r(),
+                    d,
+                    rest,
+                    rows: n,
+                }
+            })
             .collect();
-        let mut a = DMatrix::<f64>::zeros(rows.len(), holds.len() + m);
-        let mut b = DVector::<f64>::zeros(rows.len());
-        for (r, &(j, k)) in rows.iter().enumerate() {
-            a[(r, j)] = 1.0;
-            for (i, column) in columns.iter().enumerate() {
-                a[(r, holds.len() + i)] = column[k];
-            }
-            b[r] = (displacement[k] - first) / scale;
-        }
         Ok(HoldRows {
-            a,
-            b,
-            hold_of_row: rows.iter().map(|r| r.0).collect(),
-            holds: holds.len(),
+            blocks,
             elements: m,
         })
     }
 
-    /// The weights fitted on the rows of every hold but `left_out`, with `smoothness`.
+    /// The weights fitted on every hold but `left_out`, with `smoothness`.
     fn solve(&self, smoothness: f64, left_out: Option<usize>) -> Result<Vec<f64>, IdentifyError> {
-        let rows: Vec<usize> = (0..self.b.len())
-            .filter(|&r| Some(self.hold_of_row[r]) != left_out)
-            .collect();
-        let n = rows.len();
+        let holds = self.blocks.len();
         let m = self.elements;
+        let used: Vec<usize> = (0..holds).filter(|&j| Some(j) != left_out).collect();
+        let n: usize = used.iter().map(|&j| self.blocks[j].rows).sum();
         let penalties = if smoothness > 0.0 { m - 1 } else { 0 };
-        let p = self.holds + m;
-        let mut a = DMatrix::<f64>::zeros(n + penalties, p);
-        let mut b = DVector::<f64>::zeros(n + penalties);
-        for (s, &r) in rows.iter().enumerate() {
-            a.row_mut(s).copy_from(&self.a.row(r));
-            b[s] = self.b[r];
+        let p = holds + m;
+        let block_rows: usize = used.iter().map(|&j| self.blocks[j].r.nrows()).sum();
+        let mut a = DMatrix::<f64>::zeros(block_rows + penalties, p);
+        let mut b = DVector::<f64>::zeros(block_rows + penalties);
+        let mut row = 0;
+        for &j in &used {
+            let block = &self.blocks[j];
+            for r in 0..block.r.nrows() {
+                a[(row, j)] = block.r[(r, 0)];
+                for i in 0..m {
+                    a[(row, holds + i)] = block.r[(r, i + 1)];
+                }
+                b[row] = block.d[r];
+                row += 1;
+            }
         }
         let weight = smoothness * (n as f64).sqrt();
         for i in 0..penalties {
-            a[(n + i, self.holds + i)] = -weight;
-            a[(n + i, self.holds + i + 1)] = weight;
+            a[(row + i, holds + i)] = -weight;
+            a[(row + i, holds + i + 1)] = weight;
         }
         // Active set: the weights that would come out negative are held at zero, one at a
         // time; a left-out hold's indicator column is all zero and left out too.
@@ -183,19 +208,19 @@ impl HoldRows {
                 .solve(&b, 1e-12)
                 .map_err(|reason| IdentifyError::InvalidOption {
                     option: "creep holds",
-                    value: format!("{} holds", self.holds),
+                    value: format!("{holds} holds"),
                     reason: reason.to_owned(),
                 })?;
             let mut theta = vec![0.0; p];
             for (s, &c) in keep.iter().enumerate() {
                 theta[c] = solution[s];
             }
-            let most_negative = (self.holds..p)
+            let most_negative = (holds..p)
                 .filter(|&c| free[c] && theta[c] < 0.0)
                 .min_by(|&x, &y| theta[x].total_cmp(&theta[y]));
             match most_negative {
                 Some(c) => free[c] = false,
-                None => return Ok(theta[self.holds..].to_vec()),
+                None => return Ok(theta[holds..].to_vec()),
             }
         }
     }
@@ -203,20 +228,18 @@ impl HoldRows {
     /// Leave-one-hold-out RMS error (about each left-out hold's mean), % of the output range.
     fn held_out_percent(&self, smoothness: f64) -> Result<f64, IdentifyError> {
         let (mut sum, mut count) = (0.0, 0usize);
-        for j in 0..self.holds {
+        for (j, block) in self.blocks.iter().enumerate() {
             let weights = self.solve(smoothness, Some(j))?;
-            let residuals: Vec<f64> = (0..self.b.len())
-                .filter(|&r| self.hold_of_row[r] == j)
-                .map(|r| {
-                    let predicted: f64 = (0..self.elements)
-                        .map(|i| weights[i] * self.a[(r, self.holds + i)])
-                        .sum();
-                    self.b[r] - predicted
-                })
-                .collect();
-            let mean = residuals.iter().sum::<f64>() / residuals.len().max(1) as f64;
-            sum += residuals.iter().map(|e| (e - mean).powi(2)).sum::<f64>();
-            count += residuals.len();
+            // u = d - R [0; c], then the best level beta along R's first column.
+            let c = DVector::from_iterator(
+                self.elements + 1,
+                std::iter::once(0.0).chain(weights.iter().copied()),
+            );
+            let u = &block.d - &block.r * c;
+            let r0 = block.r.column(0);
+            let beta = r0.dot(&u) / r0.norm_squared().max(f64::MIN_POSITIVE);
+            sum += (u - r0 * beta).norm_squared() + block.rest;
+            count += block.rows;
         }
         Ok(100.0 * (sum / count.max(1) as f64).sqrt())
     }
@@ -254,14 +277,14 @@ pub fn creep_weights_from_holds(
     let chosen = if candidates.is_empty() {
         smoothness
     } else {
-        if rows.holds < 2 {
+        if rows.blocks.len() < 2 {
             return Err(IdentifyError::InvalidOption {
                 option: "creep smoothness candidates",
                 value: format!("{candidates:?}"),
                 reason: format!(
                     "choosing the smoothness by leaving a hold out needs two holds or more; the \
                      record has {}",
-                    rows.holds
+                    rows.blocks.len()
                 ),
             });
         }
