@@ -5,11 +5,17 @@
 //!
 //! Criterion's throughput is in channel-steps (ticks x channels) per second: divide 1e9 by it
 //! for nanoseconds per channel-step, the figure issue 16's acceptance names.
+//!
+//! The banks take the widest compilation of their kernels the processor has; set
+//! `HYSTCOMP_BANK_PATH` to `baseline`, `avx2` or `avx512` to time another
+//! ([`hystcomp_core::VectorPath`]).
 
 use criterion::{BenchmarkId, Criterion, Throughput, criterion_group, criterion_main};
 use hystcomp_core::{
-    CompensatorBank, DihcBank, Heap, IhcBank, Mpim, OutputLimits, Real, SolveMode, WihcBank,
+    CompensatorBank, DihcBank, Heap, IhcBank, Mpim, OutputLimits, Real, SolveMode, VectorPath,
+    WihcBank,
     paper::{self, PublishedMpim},
+    with_vector_path,
 };
 use std::hint::black_box;
 
@@ -50,7 +56,18 @@ fn trajectory<T: Real>(plants: &[Mpim<T, Vec<T>>]) -> Vec<T> {
     out
 }
 
+/// The compilation `HYSTCOMP_BANK_PATH` names (the widest the processor has by default).
+fn path() -> VectorPath {
+    match std::env::var("HYSTCOMP_BANK_PATH").as_deref() {
+        Ok("baseline") => VectorPath::Baseline,
+        Ok("avx2") => VectorPath::Avx2,
+        Ok("avx512") => VectorPath::Avx512,
+        _ => VectorPath::Best,
+    }
+}
+
 fn bench_type<T: Real>(c: &mut Criterion, type_name: &str) {
+    let path = path();
     let mut group = c.benchmark_group(format!("bank_{type_name}"));
     group.warm_up_time(std::time::Duration::from_secs(1));
     group.measurement_time(std::time::Duration::from_secs(3));
@@ -111,8 +128,10 @@ fn bench_type<T: Real>(c: &mut Criterion, type_name: &str) {
         for (name, bank) in banks.iter_mut() {
             group.bench_with_input(BenchmarkId::new(*name, channels), &channels, |b, _| {
                 b.iter(|| {
-                    bank.reset();
-                    bank.process(black_box(&desired), &mut control).unwrap();
+                    with_vector_path(path, || {
+                        bank.reset();
+                        bank.process(black_box(&desired), &mut control).unwrap();
+                    })
                 })
             });
         }

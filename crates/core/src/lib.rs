@@ -73,6 +73,8 @@ pub use bank::{
     BankError, BankStorage, CompensatorBank, DihcBank, Fixed, IhcBank, LANES, MAX_CHANNELS,
     PLAIN_DEGREE, WihcBank, check_signal, check_tick, dihc_bank_rows, plant_bank_rows,
 };
+#[cfg(feature = "std")]
+pub use bank::{VectorPath, with_vector_path};
 pub use buffer::{Bounded, Buffer};
 pub use chain::{ChainCompensator, ChainModel};
 pub use compensator::{Compensator, Diagnostics, OutputLimits, SolveMode};

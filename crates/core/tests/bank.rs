@@ -9,8 +9,8 @@ mod common;
 use common::*;
 use hystcomp_core::{
     BankError, Compensator, CompensatorBank, CoreError, Dihc, DihcBank, Fixed, Heap, Ihc, IhcBank,
-    InputPolynomial, MAX_INPUT_DEGREE, Mpim, OutputLimits, PLAIN_DEGREE, Real, SolveMode, Wihc,
-    WihcBank, dihc_bank_rows, plant_bank_rows,
+    InputPolynomial, MAX_INPUT_DEGREE, Mpim, OutputLimits, PLAIN_DEGREE, Real, SolveMode,
+    VectorPath, Wihc, WihcBank, dihc_bank_rows, plant_bank_rows, with_vector_path,
 };
 use proptest::prelude::*;
 use rand::{Rng, RngExt};
@@ -277,6 +277,49 @@ proptest! {
         check_dihc_bank::<f64, 8>(&models, &ranges, &limits, &desired)?;
         check_dihc_bank::<f32, 8>(&models, &ranges, &limits, &desired)?;
         check_dihc_bank::<f64, 3>(&models, &ranges, &limits, &desired)?;
+    }
+}
+
+/// The compilations of the kernels besides the default (the widest the processor has).
+const PATHS: [VectorPath; 3] = [VectorPath::Baseline, VectorPath::Avx2, VectorPath::Avx512];
+
+/// A compilation this processor cannot run is said, not passed silently.
+#[test]
+fn every_vector_path_runs_here_or_is_said() {
+    for path in PATHS {
+        if !path.available() {
+            hystcomp_testkit::skip(format!(
+                "bank kernels: this processor has no {path:?}, so that compilation is not compared \
+                 with the single channels here"
+            ));
+        }
+    }
+    assert!(VectorPath::Baseline.available());
+}
+
+proptest! {
+    #![proptest_config(seeded(24, 1603))]
+
+    /// Every compilation of the kernels this processor can run (baseline SSE2, AVX2, AVX-512),
+    /// chosen explicitly: IHC, WIHC and DIHC banks in f64 and f32 equal their single twins bit
+    /// for bit (limits, clamps, NaN and infinite inputs, diagnostics), so the paths equal each
+    /// other.
+    #[test]
+    fn every_vector_path_equals_the_single_channels(seed in any::<u64>(), channels in 1usize..21, mode in 0usize..4) {
+        let (models, limits, desired) = random_bank(seed, channels, 200);
+        let mut rng = rng(seed ^ 0xD2);
+        let ranges: Vec<(f64, f64)> = (0..channels)
+            .map(|_| (0.1 * rng.random::<f64>(), 0.8 + 0.2 * rng.random::<f64>()))
+            .collect();
+        for path in PATHS.into_iter().filter(|p| p.available()) {
+            with_vector_path(path, || -> Result<(), TestCaseError> {
+                prop_assert_eq!(VectorPath::current(), path);
+                check_plant_banks::<f64, 8>(&models, &limits, &desired, MODES[mode])?;
+                check_plant_banks::<f32, 8>(&models, &limits, &desired, MODES[mode])?;
+                check_dihc_bank::<f64, 8>(&models, &ranges, &limits, &desired)?;
+                check_dihc_bank::<f32, 8>(&models, &ranges, &limits, &desired)
+            })?;
+        }
     }
 }
 

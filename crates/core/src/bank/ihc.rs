@@ -178,6 +178,7 @@ struct Eq5Delayed<T, const W: usize> {
 }
 
 impl<T: Real, const W: usize> LaneEquation<T, W> for Eq5Delayed<T, W> {
+    const INVERSE_ALPHA: bool = false;
     #[inline(always)]
     fn residual(&self, w: L<T, W>, _alpha: L<T, W>, _beta: L<T, W>) -> L<T, W> {
         w - self.w

@@ -13,7 +13,8 @@
 //! every quantity is a row of `W` values, one per channel: the thresholds of operator `i` of
 //! the `W` channels side by side, then their weights, and so on. The per-sample work of a
 //! block is the single-channel compensator's work written lane by lane, so the compiler turns
-//! it into vector instructions across channels (AVX2 on x86-64, chosen at run time). Each
+//! it into vector instructions across channels (on x86-64 with `std`, compiled also for AVX2 and
+//! AVX-512 and the widest the processor has chosen at run time: [`VectorPath`]). Each
 //! branch of the single-channel code becomes a mask (each lane all ones or all zeros in an
 //! integer as wide as the sample type, the form vector compares produce and blends consume,
 //! so that a condition never leaves the vector registers); an exact solve that needs more
@@ -47,6 +48,8 @@ use core::fmt;
 
 pub use dihc::DihcBank;
 pub use ihc::IhcBank;
+#[cfg(feature = "std")]
+pub use run::{VectorPath, with_vector_path};
 #[cfg(feature = "alloc")]
 pub use storage::Heap;
 pub use storage::{BankStorage, Fixed, PLAIN_DEGREE, dihc_bank_rows, plant_bank_rows};

@@ -35,6 +35,9 @@ pub(crate) trait LaneEquation<T: Real, const W: usize> {
     fn rounding(&self, _x: L<T, W>, _alpha: L<T, W>, _beta: L<T, W>) -> L<T, W> {
         Lanes::zero()
     }
+    /// Whether [`LaneEquation::root`] reads its `inverse_alpha` (otherwise [`solve`] passes
+    /// `1 / a` without reading the table).
+    const INVERSE_ALPHA: bool = true;
     /// The root in `[lo, hi]` for the lanes of `active`.
     #[allow(clippy::too_many_arguments)]
     fn root(
@@ -130,6 +133,7 @@ impl<T: Real, const W: usize> LaneSolution<T, W> {
 pub(crate) struct ReachOnly<'a, E>(pub &'a E);
 
 impl<T: Real, E: LaneEquation<T, W>, const W: usize> LaneEquation<T, W> for ReachOnly<'_, E> {
+    const INVERSE_ALPHA: bool = false;
     #[inline(always)]
     fn residual(&self, x: L<T, W>, alpha: L<T, W>, beta: L<T, W>) -> L<T, W> {
         self.0.residual(x, alpha, beta)
@@ -187,9 +191,6 @@ pub(crate) fn solve<T: Real, E: LaneEquation<T, W>, const W: usize>(
     let moving_weight = block
         .gather(rows.prefix(), before)
         .or_keep(some_moving, zero);
-    let mut inverse_alpha = block
-        .gather(rows.inverse_alpha(), before)
-        .or_keep(some_moving, state.inverse_a);
     let mut alpha = state.a + moving_weight;
     let mut beta = state.memory_sum - moving_weight * state.input;
     let mut moving = first;
@@ -228,9 +229,6 @@ pub(crate) fn solve<T: Real, E: LaneEquation<T, W>, const W: usize>(
         alpha = (alpha + b).or_keep(advance, alpha);
         let held = (b * (r + w)).or_keep(rising, b * w);
         beta = (beta - held).or_keep(advance, beta);
-        inverse_alpha = block
-            .gather(rows.inverse_alpha(), cursor)
-            .or_keep(advance, inverse_alpha);
         edge = breakpoint.or_keep(advance, edge);
         f_edge = f_break.or_keep(advance, f_edge);
         cursor = next;
@@ -256,6 +254,17 @@ pub(crate) fn solve<T: Real, E: LaneEquation<T, W>, const W: usize>(
         f_lo = f_edge.or_keep(rising, f_end).or_keep(bracketed, f_lo);
         f_hi = f_end.or_keep(rising, f_edge).or_keep(bracketed, f_hi);
     }
+    // The reciprocal slope of the segment reached, from the table: 1 / (a + prefix[moving - 1])
+    // (1 / a with none moving), read once after the walk instead of at every segment.
+    let inverse_alpha = if E::INVERSE_ALPHA {
+        let some_moving = moving.test::<T>(|k| k > 0);
+        let before = moving.map(|k| k.saturating_sub(1));
+        block
+            .gather(rows.inverse_alpha(), before)
+            .or_keep(some_moving, state.inverse_a)
+    } else {
+        state.inverse_a
+    };
     let solving = active.and_not(saturated);
     let root = equation.root(lo, hi, f_lo, f_hi, alpha, beta, inverse_alpha, solving);
     LaneSolution {

@@ -2,9 +2,11 @@
 //! processor has.
 //!
 //! The kernels are written once, generic over the lane count; on x86-64 with `std` the same
-//! code is also compiled for AVX2 and chosen at run time when the processor has it (no fused
-//! multiply-add is enabled or used, so both compilations round every operation the same way
-//! and give the same bits as the single-channel compensators).
+//! code is also compiled for AVX2 and for AVX-512, and the widest the processor has is chosen at
+//! run time ([`VectorPath`]). No fused multiply-add is used in any of them (Rust never fuses a
+//! multiplication and an addition by itself, whatever the target features), so every
+//! compilation rounds every operation the same way and gives the same bits as the
+//! single-channel compensators.
 
 use super::lanes::Lanes;
 use super::storage::Block;
@@ -15,6 +17,79 @@ pub(crate) trait BlockKernel<T: Real, const W: usize> {
     /// Steps the block with one desired position per lane (NaN for a padding lane) and returns
     /// one output per lane.
     fn step(&self, block: &mut Block<'_, T, W>, desired: Lanes<T, W>) -> Lanes<T, W>;
+}
+
+/// The compilations of the banks' kernels (x86-64 with `std`): the one a bank uses is the widest
+/// the processor has, unless a thread asks for another with [`with_vector_path`].
+///
+/// Every path gives the same bits (the tests compare each with the single-channel
+/// compensators); they differ only in speed.
+#[cfg(feature = "std")]
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum VectorPath {
+    /// The widest the processor has (the default).
+    Best,
+    /// The target's baseline (SSE2 on x86-64): what every other target runs.
+    Baseline,
+    /// AVX2: eight `f32` lanes in a register, four `f64`.
+    Avx2,
+    /// AVX-512 (F, VL, BW, DQ): 32 vector registers, mask registers for the lanes' conditions,
+    /// eight `f64` lanes in one register.
+    Avx512,
+}
+
+#[cfg(feature = "std")]
+std::thread_local! {
+    static PATH: core::cell::Cell<VectorPath> = const { core::cell::Cell::new(VectorPath::Best) };
+}
+
+#[cfg(feature = "std")]
+impl VectorPath {
+    /// Whether this processor can run the path.
+    pub fn available(self) -> bool {
+        match self {
+            VectorPath::Best | VectorPath::Baseline => true,
+            #[cfg(target_arch = "x86_64")]
+            VectorPath::Avx2 => std::is_x86_feature_detected!("avx2"),
+            #[cfg(target_arch = "x86_64")]
+            VectorPath::Avx512 => {
+                std::is_x86_feature_detected!("avx512f")
+                    && std::is_x86_feature_detected!("avx512vl")
+                    && std::is_x86_feature_detected!("avx512bw")
+                    && std::is_x86_feature_detected!("avx512dq")
+            }
+            #[cfg(not(target_arch = "x86_64"))]
+            _ => false,
+        }
+    }
+
+    /// The path the banks of this thread take: the one asked for if the processor has it,
+    /// else the widest it has.
+    pub fn current() -> VectorPath {
+        let asked = PATH.with(|p| p.get());
+        if asked != VectorPath::Best && asked.available() {
+            return asked;
+        }
+        [VectorPath::Avx512, VectorPath::Avx2]
+            .into_iter()
+            .find(|p| p.available())
+            .unwrap_or(VectorPath::Baseline)
+    }
+}
+
+/// Runs `f` with this thread's banks on `path` (if the processor has it; the widest it has
+/// otherwise), then returns to the path before: to compare the compilations, or to measure
+/// one.
+#[cfg(feature = "std")]
+pub fn with_vector_path<R>(path: VectorPath, f: impl FnOnce() -> R) -> R {
+    struct Restore(VectorPath);
+    impl Drop for Restore {
+        fn drop(&mut self) {
+            PATH.with(|p| p.set(self.0));
+        }
+    }
+    let _restore = Restore(PATH.with(|p| p.replace(path)));
+    f()
 }
 
 /// Steps every block: `desired` and `control` hold one value per channel, in channel order
@@ -52,7 +127,23 @@ unsafe fn run_blocks_avx2<'a, T: Real, K: BlockKernel<T, W>, const W: usize>(
     run_blocks(kernel, blocks, desired, control)
 }
 
-/// Steps every block with the best compilation of the kernel for this processor.
+/// [`run_blocks`] compiled with AVX-512 (foundation, with 256-bit forms, byte/word and
+/// double/quad-word instructions).
+///
+/// # Safety
+/// The processor must support AVX-512 F, VL, BW and DQ.
+#[cfg(all(feature = "std", target_arch = "x86_64"))]
+#[target_feature(enable = "avx512f,avx512vl,avx512bw,avx512dq")]
+unsafe fn run_blocks_avx512<'a, T: Real, K: BlockKernel<T, W>, const W: usize>(
+    kernel: &K,
+    blocks: impl Iterator<Item = Block<'a, T, W>>,
+    desired: &[T],
+    control: &mut [T],
+) {
+    run_blocks(kernel, blocks, desired, control)
+}
+
+/// Steps every block with the compilation of the kernel [`VectorPath::current`] names.
 #[inline]
 pub(crate) fn run<'a, T: Real, K: BlockKernel<T, W>, const W: usize>(
     kernel: &K,
@@ -61,10 +152,18 @@ pub(crate) fn run<'a, T: Real, K: BlockKernel<T, W>, const W: usize>(
     control: &mut [T],
 ) {
     #[cfg(all(feature = "std", target_arch = "x86_64"))]
-    if std::is_x86_feature_detected!("avx2") {
-        // SAFETY: the processor supports AVX2 (checked just above).
-        unsafe { run_blocks_avx2(kernel, blocks, desired, control) };
-        return;
+    match VectorPath::current() {
+        VectorPath::Avx512 => {
+            // SAFETY: `current` names a path only if the processor supports it.
+            unsafe { run_blocks_avx512(kernel, blocks, desired, control) };
+            return;
+        }
+        VectorPath::Avx2 => {
+            // SAFETY: as above.
+            unsafe { run_blocks_avx2(kernel, blocks, desired, control) };
+            return;
+        }
+        VectorPath::Best | VectorPath::Baseline => {}
     }
     run_blocks(kernel, blocks, desired, control)
 }

@@ -349,13 +349,17 @@ impl<T: Real, const W: usize> Block<'_, T, W> {
         }
     }
 
-    /// Lane `l` of row `base + index[l]`: each lane reads its own operator.
+    /// Lane `l` of row `base + index[l]`: each lane reads its own operator. A row beyond the
+    /// block (which only lanes whose result is discarded ask for) reads the block's last row:
+    /// the index is clamped, so that the compiler can drop the check of each lane's read.
     #[inline(always)]
     pub fn gather(&self, base: usize, index: Lanes<u32, W>) -> Lanes<T, W> {
+        let Some(last) = self.values.len().checked_sub(1) else {
+            return Lanes::zero();
+        };
         Lanes(core::array::from_fn(|l| {
-            self.values
-                .get(base + index.0[l] as usize)
-                .map_or(T::zero(), |r| r[l])
+            let row = base.saturating_add(index.0[l] as usize).min(last);
+            self.values.get(row).map_or(T::zero(), |r| r[l])
         }))
     }
 }

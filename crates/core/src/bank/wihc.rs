@@ -121,6 +121,7 @@ struct Eq9<T, R, const W: usize> {
 }
 
 impl<T: Real, R: LaneRemainder<T, W>, const W: usize> LaneEquation<T, W> for Eq9<T, R, W> {
+    const INVERSE_ALPHA: bool = false;
     #[inline(always)]
     fn residual(&self, x: L<T, W>, alpha: L<T, W>, beta: L<T, W>) -> L<T, W> {
         self.remainder.with_linear(x, alpha) + beta - self.desired
