@@ -287,6 +287,36 @@ fn identify_compensate_and_crossval_take_the_full_model() {
             .unwrap()
             < 0.5
     );
+    // A test record at another rate than the training record's is refused before any work.
+    let slow = dir.path().join("slow.csv");
+    let mut text = String::from("time_s,command_v,measured_um\n");
+    for k in 0..200 {
+        let v = 5.0 + 4.0 * (k as f64 * 0.05).sin();
+        text.push_str(&format!("{},{v},{}\n", k as f64 / (RATE / 2.0), 7.5 * v));
+    }
+    std::fs::write(&slow, text).unwrap();
+    assert_fails(
+        &[
+            "crossval",
+            "--train",
+            s(&data),
+            "--test",
+            s(&slow),
+            "--voltage-column",
+            "command_v",
+            "--displacement-column",
+            "measured_um",
+            "--time-column",
+            "time_s",
+            "--model-structure",
+            "full",
+            "--dynamics-from",
+            &from,
+            "--dynamics-to",
+            &to,
+        ],
+        &["sampled at 1000 Hz, the training record at 2000 Hz; creep and vibration"],
+    );
     // Creep and vibration need the sample rate.
     assert_fails(
         &[

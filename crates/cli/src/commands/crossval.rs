@@ -242,7 +242,8 @@ pub fn run(args: &Args, ctx: Context) -> Result<(), CliError> {
             let step = (time[time.len() - 1] - time[0]) / (time.len() - 1) as f64;
             if ((1.0 / step) / chain.sample_rate_hz - 1.0).abs() > 1e-3 {
                 return Err(CliError::input(format!(
-                    "the test record is sampled at {} Hz, the training record at {} Hz;                      creep and vibration are identified at one rate: resample one of them",
+                    "the test record is sampled at {} Hz, the training record at {} Hz; \
+                     creep and vibration are identified at one rate: resample one of them",
                     crate::number(1.0 / step),
                     crate::number(chain.sample_rate_hz)
                 )));
