@@ -323,12 +323,17 @@ impl fmt::Display for ModelFileError {
             }
             ModelFileError::Write(source) => write!(f, "{source}"),
             ModelFileError::Parse { path, message } => {
-                write!(f, "{path} is not a valid hystcomp model file: {message}")
+                write!(
+                    f,
+                    "{} is not a valid hystcomp model file: {message}",
+                    source_name(path)
+                )
             }
             ModelFileError::UnknownVersion { path, found } => write!(
                 f,
-                "{path} has format_version {found}, but this hystcomp reads format_version 1 \
-                 and 2; update hystcomp or re-identify the model"
+                "{} has format_version {found}, but this hystcomp reads format_version 1 \
+                 and 2; update hystcomp or re-identify the model",
+                source_name(path)
             ),
             ModelFileError::Invalid { message } => f.write_str(message),
             ModelFileError::Model(e) => write!(f, "the model parameters are refused: {e}"),
@@ -337,6 +342,16 @@ impl fmt::Display for ModelFileError {
 }
 
 impl std::error::Error for ModelFileError {}
+
+/// What a parse error names: the file's path, or "the JSON text" for
+/// [`ModelFile::from_json`], which has none.
+fn source_name(path: &str) -> &str {
+    if path.is_empty() {
+        "the JSON text"
+    } else {
+        path
+    }
+}
 
 impl From<CoreError> for ModelFileError {
     fn from(e: CoreError) -> Self {

@@ -374,6 +374,11 @@ fn a_bare_nan_token_is_named() {
         let edited = text.replacen("\"a1\": -0.1569", &format!("\"a1\": {token}"), 1);
         assert_ne!(edited, text, "the example's a1 line");
         let err = ModelFile::from_json(&edited).unwrap_err().to_string();
+        // Text has no path: the message names the JSON text, not an empty path.
+        assert!(
+            err.starts_with("the JSON text is not a valid hystcomp model file"),
+            "{err}"
+        );
         for fragment in [
             format!("bare {token}"),
             "json.dump".to_owned(),
