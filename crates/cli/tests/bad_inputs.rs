@@ -1535,6 +1535,15 @@ fn matrix() -> Vec<(Fixture, Case)> {
     });
     add(&|f| {
         Case::refused(
+            "learn with more e_mhe bins than the trial supports",
+            learn(f, &["--bins", "1000"]),
+            1,
+            &["--bins: e_mhe bins = 1000", "at most 200 bins"],
+        )
+        .output(f.path("next.csv"))
+    });
+    add(&|f| {
+        Case::refused(
             "learn with a gain of 1e308",
             learn(f, &["--gain", "1e308"]),
             1,

@@ -287,29 +287,29 @@ fn options(args: &Args, sample_rate_hz: f64) -> Result<LearningOptions, CliError
         limits: args.limits,
         mhe_bins: args.bins,
     };
-    options.validate().map_err(|e| {
-        let text = e.to_string();
-        let flag = match text.split(" = ").next().unwrap_or("") {
-            "gain" => "--gain",
-            "bandwidth" => "--bandwidth",
-            "filter order" => "--filter-order",
-            "lead" => "--lead",
-            "divergence factor" => "--divergence-factor",
-            "drive limits" => "--limits",
-            "e_mhe bins" => "--bins",
-            _ => "",
-        };
-        CliError::input(if flag.is_empty() {
-            text
-        } else {
-            format!("{flag}: {text}")
-        })
-    })?;
+    options.validate().map_err(learn_error)?;
     Ok(options)
 }
 
+/// A learning error, prefixed with the command-line flag of the option it names (the library
+/// names options in words: `e_mhe bins = 100000 cannot be used: ...`).
 fn learn_error(e: hystcomp_learn::LearnError) -> CliError {
-    CliError::input(e.to_string())
+    let text = e.to_string();
+    let flag = match text.split(" = ").next().unwrap_or("") {
+        "gain" => "--gain",
+        "bandwidth" => "--bandwidth",
+        "filter order" => "--filter-order",
+        "lead" => "--lead",
+        "divergence factor" => "--divergence-factor",
+        "drive limits" => "--limits",
+        "e_mhe bins" => "--bins",
+        _ => "",
+    };
+    CliError::input(if flag.is_empty() {
+        text
+    } else {
+        format!("{flag}: {text}")
+    })
 }
 
 fn percent_line(label: &str, i: &TrackingIndices, bins: usize) -> String {
