@@ -92,6 +92,78 @@ fn identify_args<'a>(data: &'a Path, out: &'a Path, from: &'a str, to: &'a str) 
 }
 
 #[test]
+fn identify_fits_the_creep_on_the_record_holds_when_asked() {
+    let dir = tempfile::tempdir().unwrap();
+    let (_, config) = stage_file(dir.path());
+    let (data, from, to) = record(dir.path(), &config);
+    let (from, to) = (from.to_string(), to.to_string());
+    let plant = dir.path().join("plant.json");
+    let mut args = identify_args(&data, &plant, &from, &to);
+    args.extend(["--creep-fit", "holds"]);
+    let out = hystcomp(&args);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let json: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    let report = &json["report"];
+    // The record's rest and two holds; every default candidate scored, one chosen.
+    assert!(
+        report["hysteresis"]["detail"]
+            .as_str()
+            .unwrap()
+            .contains("on 3 holds"),
+        "{report}"
+    );
+    let candidates = report["creep"]["smoothness_candidates"].as_array().unwrap();
+    assert_eq!(
+        candidates.len(),
+        hystcomp_identify::creep_holds::DEFAULT_SMOOTHNESS_CANDIDATES.len()
+    );
+    let chosen = report["creep"]["smoothness"].as_f64().unwrap();
+    assert!(candidates.iter().any(|c| c[0].as_f64() == Some(chosen)));
+    // Creep still helps the fit.
+    let rms: Vec<f64> = report["contributions"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|c| c["rms_percent"].as_f64().unwrap())
+        .collect();
+    assert!(rms[1] < 0.6 * rms[0], "{rms:?}");
+    let model = ModelFile::load(&plant).unwrap();
+    assert!(model.creep.unwrap().weights.iter().all(|w| *w >= 0.0));
+
+    // A record without holds is refused, saying why, and writes nothing.
+    let moving = dir.path().join("moving.csv");
+    let command: Vec<f64> = (0..20_000)
+        .map(|k| 5.0 + 4.0 * (k as f64 / RATE).sin())
+        .collect();
+    let measured = simulate(&config, 1, &command).unwrap().measured_position_um;
+    write_record(&moving, &command, &measured);
+    let refused = dir.path().join("refused.json");
+    let out = hystcomp(&[
+        "identify",
+        "--data",
+        s(&moving),
+        "--voltage-column",
+        "command_v",
+        "--displacement-column",
+        "measured_um",
+        "--time-column",
+        "time_s",
+        "--creep",
+        "--creep-fit",
+        "holds",
+        "-o",
+        s(&refused),
+    ]);
+    assert_eq!(out.status.code(), Some(1), "{}", stderr(&out));
+    assert!(
+        stderr(&out).contains("holds its voltage nowhere"),
+        "{}",
+        stderr(&out)
+    );
+    assert!(!refused.exists());
+}
+
+#[test]
 fn identify_compensate_and_crossval_take_the_full_model() {
     let dir = tempfile::tempdir().unwrap();
     let (stage, config) = stage_file(dir.path());

@@ -51,7 +51,8 @@ pub const CREEP_SMOOTHNESS: f64 = 1.0;
 
 /// The smoothness penalties the creep fit on the record's holds chooses among, by leaving
 /// each hold out in turn (`hystcomp_identify::creep_holds`).
-pub const HOLD_SMOOTHNESS_CANDIDATES: [f64; 7] = [0.01, 0.03, 0.1, 0.3, 1.0, 3.0, 10.0];
+pub const HOLD_SMOOTHNESS_CANDIDATES: [f64; 7] =
+    hystcomp_identify::creep_holds::DEFAULT_SMOOTHNESS_CANDIDATES;
 
 impl Default for FullOptions {
     /// The creep link's time constants end at 100 s: the record (154 s) holds a step for 60 s

@@ -35,6 +35,10 @@ use crate::IdentifyError;
 /// (amplifier, resonance) settle within them.
 pub const HOLD_SETTLE_S: f64 = 0.02;
 
+/// The smoothness penalties a fit on holds chooses among by default (by leaving each hold
+/// out), from nearly none to a flat spectrum.
+pub const DEFAULT_SMOOTHNESS_CANDIDATES: [f64; 7] = [0.01, 0.03, 0.1, 0.3, 1.0, 3.0, 10.0];
+
 /// The maximal runs of at least `min_samples` samples over which `voltage` does not change
 /// (consecutive samples equal to within `1e-9` of the record's range), as ranges of sample
 /// indices.

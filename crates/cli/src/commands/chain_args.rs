@@ -17,6 +17,17 @@ pub enum Structure {
     Full,
 }
 
+/// How the creep link's weights are fitted.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum CreepFit {
+    /// Jointly with the hysteresis, over the whole record.
+    Joint,
+    /// On the record's holds (the voltage constant for 1 s or more; at least two), the
+    /// smoothness of the weights chosen by leaving each hold out, then the hysteresis on the
+    /// creep-free displacement.
+    Holds,
+}
+
 /// Creep and vibration options of `identify` and `crossval`.
 #[derive(Debug, Clone, clap::Args)]
 pub struct ChainArgs {
@@ -42,6 +53,12 @@ pub struct ChainArgs {
     /// decade from 10 ms, or two sample periods, to a quarter of the record, at most 1000 s).
     #[arg(long, value_name = "T1,T2,...", value_delimiter = ',')]
     pub creep_time_constants: Option<Vec<f64>>,
+    /// How the creep weights are fitted: joint (with the hysteresis, over the whole record) or
+    /// holds (on the record's step-and-hold segments, where the hysteresis does not move, then
+    /// the hysteresis on the creep-free displacement; the creep does not absorb the
+    /// hysteresis model's mismatch, so a held step drifts less).
+    #[arg(long, value_enum, default_value = "joint", value_name = "FIT")]
+    pub creep_fit: CreepFit,
     /// Seconds from the start of the record where the vibration segment (high-frequency
     /// excitation) starts; default: the whole record.
     #[arg(long, value_name = "SECONDS")]
@@ -95,6 +112,12 @@ impl ChainArgs {
                 let shortest = (2.0 * self.decimation as f64 / rate).max(0.01);
                 let record_s = loaded.voltage.len() as f64 / rate;
                 CreepOptions::log_spaced(shortest, (record_s / 4.0).clamp(shortest, 1000.0), 2)
+            }
+        });
+        let creep = creep.map(|c| match self.creep_fit {
+            CreepFit::Joint => c,
+            CreepFit::Holds => {
+                c.on_holds(&hystcomp_identify::creep_holds::DEFAULT_SMOOTHNESS_CANDIDATES)
             }
         });
         if let Some(c) = &creep {
