@@ -80,6 +80,9 @@ fn main() {
     if let Ok(n) = std::env::var("OPS") {
         options.full.operators = n.parse().unwrap();
     }
+    if let Ok(band) = std::env::var("BAND") {
+        options.full.inverse_band_hz = Some(band.parse().unwrap());
+    }
     if std::env::var("SEGGAIN").as_deref() == Ok("1") {
         options.full.dynamics.segment_gain = true;
     }
@@ -103,6 +106,17 @@ fn main() {
             "study 20 s {} e_rms {:.3} %",
             r.label, r.indices.e_rms_percent
         );
+    }
+    for h in &study.duration.hold {
+        println!("study hold {} drift {:.3} um", h.label, h.drift_um);
+    }
+    for series in &study.duration.series {
+        if let Some(i) = series.at(200.0) {
+            println!(
+                "study 200 s {} e_rms {:.3} %",
+                series.label, i.e_rms_percent
+            );
+        }
     }
     if std::env::var("SHORT").is_ok() {
         return;

@@ -42,6 +42,11 @@ pub struct FullOptions {
     pub operators: usize,
     /// The inverse (DIHC) chain's play operators.
     pub inverse_operators: usize,
+    /// In the speed study, the trajectory the chain inverts is low-passed with zero phase at
+    /// this frequency, Hz ([`crate::band_limit`]; indices against the trajectory itself);
+    /// `None` inverts it whole. Meant as the top of the band the vibration link was
+    /// identified on.
+    pub inverse_band_hz: Option<f64>,
 }
 
 /// The default smoothness penalty on the `full` pipeline's creep weights
@@ -78,6 +83,7 @@ impl Default for FullOptions {
             output_error_iterations: 0,
             operators: 10,
             inverse_operators: 10,
+            inverse_band_hz: None,
         }
     }
 }

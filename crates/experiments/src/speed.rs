@@ -24,6 +24,7 @@ use rayon::prelude::*;
 use serde::Serialize;
 
 use crate::TrackingIndices;
+use crate::band_limit::zero_phase_low_pass;
 use crate::signals::{PaperTrajectory, Raster, Shape, Signal};
 use crate::study::{Approach, StudyError, track};
 
@@ -121,18 +122,41 @@ fn window_limited_share(
     Ok((whole - before) as f64 / (command.len() - from).max(1) as f64)
 }
 
+/// The command `approach` sends for `desired`: a chain with a vibration link inverts the
+/// trajectory low-passed at `band_hz` (zero phase, [`crate::band_limit`]) when one is given.
+fn command(
+    approach: &Approach<'_>,
+    desired: &[f64],
+    full_scale: f64,
+    band_hz: Option<f64>,
+    sample_rate_hz: f64,
+) -> Result<Vec<f64>, StudyError> {
+    let vibration = approach
+        .model
+        .is_some_and(|(model, _)| model.vibration.is_some());
+    let (command, _) = match band_hz {
+        Some(band) if vibration => approach.command(
+            &zero_phase_low_pass(desired, band, sample_rate_hz),
+            full_scale,
+        )?,
+        _ => approach.command(desired, full_scale)?,
+    };
+    Ok(command)
+}
+
 fn runs(
     stage: &StageConfig,
     seed: u64,
     approaches: &[Approach<'_>],
     full_scale: f64,
+    band_hz: Option<f64>,
     desired: &[f64],
     from: usize,
 ) -> Result<Vec<SpeedRun>, StudyError> {
     approaches
         .par_iter()
         .map(|approach| {
-            let (command, _) = approach.command(desired, full_scale)?;
+            let command = command(approach, desired, full_scale, band_hz, stage.sample_rate_hz)?;
             let limited_share = window_limited_share(stage, &command, from)?;
             let measured = track(stage, seed, &command)?;
             Ok(SpeedRun {
@@ -145,12 +169,14 @@ fn runs(
 }
 
 /// Runs the speed study for `approaches` (the last is the one whose drive sets the amplitude
-/// reductions: the `full` pipeline's IHC). See the [module documentation](self).
+/// reductions: the `full` pipeline's IHC), chains with a vibration link inverting the
+/// trajectory low-passed at `band_hz` when given. See the [module documentation](self).
 pub(crate) fn run_speed(
     stage: &StageConfig,
     seed: u64,
     approaches: &[Approach<'_>],
     full_scale: f64,
+    band_hz: Option<f64>,
 ) -> Result<SpeedStudy, StudyError> {
     let fs = stage.sample_rate_hz;
     let option = |e: crate::signals::SignalError| StudyError::Option(e.to_string());
@@ -175,7 +201,7 @@ pub(crate) fn run_speed(
             };
             for _ in 0..MAX_REDUCTIONS {
                 let (desired, _, from) = make(scale)?;
-                let (command, _) = judge.command(&desired, full_scale)?;
+                let command = command(judge, &desired, full_scale, band_hz, fs)?;
                 if window_limited_share(stage, &command, from)? == 0.0 {
                     break;
                 }
@@ -196,7 +222,7 @@ pub(crate) fn run_speed(
             Ok(SpeedPoint {
                 rate_hz: rate,
                 amplitude_scale: scale,
-                runs: runs(stage, seed, approaches, full_scale, &desired, from)?,
+                runs: runs(stage, seed, approaches, full_scale, band_hz, &desired, from)?,
             })
         })
         .collect::<Result<_, _>>()?;
@@ -221,7 +247,9 @@ pub(crate) fn run_speed(
                 Ok(SpeedPoint {
                     rate_hz: rate,
                     amplitude_scale: 1.0,
-                    runs: runs(config, seed, approaches, full_scale, &desired, from)?,
+                    runs: runs(
+                        config, seed, approaches, full_scale, band_hz, &desired, from,
+                    )?,
                 })
             })
             .collect()

@@ -877,7 +877,13 @@ pub fn run_study(
     )?;
     observer.end();
     observer.begin("speed", 1);
-    let speed = run_speed(&options.stage, tracking_seed, &approaches(true), full_scale)?;
+    let speed = run_speed(
+        &options.stage,
+        tracking_seed,
+        &approaches(true),
+        full_scale,
+        options.full.inverse_band_hz,
+    )?;
     observer.end();
     // 7. Learning from repetition, from the exact and the full pipeline's IHC.
     observer.begin("learning", 1);
