@@ -344,7 +344,16 @@ fn main() {
             &mut hystcomp_experiments::study::Silent,
         )
         .unwrap();
-        println!("study in {:.2} s", t.elapsed().as_secs_f64());
+        println!(
+            "study in {:.2} s; creep grid {:?}; weights {:?}",
+            t.elapsed().as_secs_f64(),
+            study.full.creep_grid,
+            study.full.plant.report.creep.as_ref().map(|c| (
+                &c.part.time_constants_s,
+                &c.part.weights,
+                c.smoothness
+            ))
+        );
         println!("{}", hystcomp_experiments::beyond::summarize_beyond(&study));
         return;
     }

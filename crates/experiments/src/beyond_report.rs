@@ -84,9 +84,12 @@ fn full_section(
                  first-order elements at fixed log-spaced time constants, Kuhnen's creep \
                  operators, Kuhnen & Krejci 2001, 2009), then the vibration link D (a discrete \
                  linear model of unit static gain with a delay of {} samples, {} poles and {} \
-                 numerator coefficients, order chosen from data). Hysteresis and creep are \
-                 fitted jointly by one linear least-squares problem under the invertibility \
-                 constraints; the vibration link from the small multisine around mid-range. \
+                 numerator coefficients, order chosen from data). The creep weights are fitted \
+                 on the record's holds, where the hysteresis does not move (their smoothness \
+                 and the longest time constant chosen by leaving each hold out), then the \
+                 hysteresis on the creep-free displacement by least squares under the \
+                 invertibility constraints; the vibration link from the small multisine around \
+                 mid-range. \
                  Everything comes from the {:.0} s identification record's (voltage, \
                  displacement) samples, never from the stage file ({:.2} s of computing).",
                 f.creep_time_constants_s.len(),

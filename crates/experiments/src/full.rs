@@ -30,6 +30,12 @@ pub struct FullOptions {
     /// record's holds with the smoothness chosen among [`HOLD_SMOOTHNESS_CANDIDATES`]; see
     /// [`FullOptions::default`]).
     pub creep: CreepOptions,
+    /// When not empty, the creep link's time constants end at the one of these, s, whose bank
+    /// (two per decade from the first time constant of `creep`) predicts the record's holds
+    /// best, each hold left out in turn (`hystcomp_identify::creep_holds`); `creep`'s own
+    /// list is then only its start. Used with `creep.from_holds` and its smoothness
+    /// candidates (each bank is scored with its best smoothness).
+    pub creep_longest_candidates_s: Vec<f64>,
     /// The vibration link's identification (its segment is the excitation's).
     pub dynamics: DynamicsOptions,
     /// What the identification excitation gains for the chain.
@@ -53,6 +59,10 @@ pub struct FullOptions {
 /// (`hystcomp_identify::FitProblem::with_extra_smoothness`) when they are fitted jointly
 /// with the hysteresis (not the default: see [`FullOptions::default`]).
 pub const CREEP_SMOOTHNESS: f64 = 1.0;
+
+/// The longest creep time constants the `full` pipeline chooses among, s: the record's
+/// longest hold (60 s) and a decade or two beyond it.
+pub const CREEP_LONGEST_CANDIDATES_S: [f64; 3] = [100.0, 1000.0, 10_000.0];
 
 /// The smoothness penalties the creep fit on the record's holds chooses among, by leaving
 /// each hold out in turn (`hystcomp_identify::creep_holds`).
@@ -78,6 +88,7 @@ impl Default for FullOptions {
             creep: CreepOptions::log_spaced(0.01, 100.0, 2)
                 .with_smoothness(CREEP_SMOOTHNESS)
                 .on_holds(&HOLD_SMOOTHNESS_CANDIDATES),
+            creep_longest_candidates_s: CREEP_LONGEST_CANDIDATES_S.to_vec(),
             dynamics: DynamicsOptions::default(),
             excitation: ChainExcitation::default(),
             output_error_iterations: 0,
@@ -99,6 +110,9 @@ pub struct FullPipeline {
     pub runs: Vec<TrackingRun>,
     /// Wall-clock time of the two identifications, s.
     pub identification_s: f64,
+    /// The creep banks tried: `(longest time constant s, leave-one-hold-out RMS %)`, the
+    /// chosen one least (empty when the bank was given).
+    pub creep_grid: Vec<(f64, f64)>,
     /// Length of the identification record, s.
     pub record_s: f64,
 }
@@ -113,12 +127,14 @@ pub(crate) fn identify_full(
     vibration: Range<usize>,
     base: &IdentifyOptions,
     options: &FullOptions,
-) -> Result<(ChainIdentification, ChainIdentification, f64), StudyError> {
+) -> Result<FullIdentification, StudyError> {
     let started = Instant::now();
+    let (creep, creep_grid) =
+        choose_creep_grid(measured_um, command_v, sample_rate_hz, decimation, options)?;
     let chain = ChainOptions {
         sample_rate_hz,
         decimation,
-        creep: Some(options.creep.clone()),
+        creep: Some(creep),
         dynamics: Some(DynamicsOptions {
             segment: Some(vibration),
             ..options.dynamics.clone()
@@ -143,5 +159,81 @@ pub(crate) fn identify_full(
     };
     let inverse = identify_inverse_chain(command_v, measured_um, &inverse_options, &chain, &plant)
         .map_err(error("full inverse (chain)"))?;
-    Ok((plant, inverse, started.elapsed().as_secs_f64()))
+    Ok(FullIdentification {
+        plant,
+        inverse,
+        seconds: started.elapsed().as_secs_f64(),
+        creep_grid,
+    })
+}
+
+/// What [`identify_full`] returns.
+pub(crate) struct FullIdentification {
+    pub plant: ChainIdentification,
+    pub inverse: ChainIdentification,
+    pub seconds: f64,
+    pub creep_grid: Vec<(f64, f64)>,
+}
+
+/// The creep link's options: `options.creep` with its bank ending at the candidate of
+/// `options.creep_longest_candidates_s` whose weights, fitted on the record's holds with the
+/// smoothness chosen, predict each left-out hold best; and every candidate's score.
+fn choose_creep_grid(
+    measured_um: &[f64],
+    command_v: &[f64],
+    sample_rate_hz: f64,
+    decimation: usize,
+    options: &FullOptions,
+) -> Result<(CreepOptions, Vec<(f64, f64)>), StudyError> {
+    let base = &options.creep;
+    let first = base.time_constants_s.first().copied().unwrap_or(0.01);
+    if options.creep_longest_candidates_s.is_empty()
+        || !base.from_holds
+        || base.hold_smoothness_candidates.is_empty()
+    {
+        return Ok((base.clone(), Vec::new()));
+    }
+    let error = |error| StudyError::Identify {
+        model: "full plant (creep bank)".to_owned(),
+        error,
+    };
+    let holds = hystcomp_identify::creep_holds::held_segments(
+        command_v,
+        (hystcomp_identify::chain::MIN_HOLD_S * sample_rate_hz).round() as usize,
+    );
+    let (lo, hi) = measured_um
+        .iter()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &y| {
+            (a.min(y), b.max(y))
+        });
+    let mut scores = Vec::new();
+    let mut best: Option<(f64, CreepOptions)> = None;
+    for &last in &options.creep_longest_candidates_s {
+        let creep = CreepOptions {
+            time_constants_s: CreepOptions::log_spaced(first, last, 2).time_constants_s,
+            ..base.clone()
+        };
+        let fit = hystcomp_identify::creep_holds::creep_weights_from_holds(
+            measured_um,
+            1.0 / sample_rate_hz,
+            decimation,
+            &holds,
+            &creep.time_constants_s,
+            creep.smoothness,
+            &creep.hold_smoothness_candidates,
+            hi - lo,
+        )
+        .map_err(error)?;
+        let score = fit
+            .candidates
+            .iter()
+            .map(|c| c.1)
+            .fold(f64::INFINITY, f64::min);
+        scores.push((last, score));
+        if best.as_ref().is_none_or(|b| score < b.0) {
+            best = Some((score, creep));
+        }
+    }
+    let chosen = best.map_or_else(|| base.clone(), |b| b.1);
+    Ok((chosen, scores))
 }

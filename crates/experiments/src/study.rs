@@ -551,7 +551,12 @@ pub fn run_study(
         observer,
     )?;
     observer.begin("full chain", 1);
-    let (full_plant, full_inverse, full_identification_s) = identify_full(
+    let crate::full::FullIdentification {
+        plant: full_plant,
+        inverse: full_inverse,
+        seconds: full_identification_s,
+        creep_grid,
+    } = identify_full(
         &record.command_v,
         &record.measured_um,
         fs,
@@ -940,6 +945,7 @@ pub fn run_study(
             inverse: full_inverse,
             runs: full_runs,
             identification_s: full_identification_s,
+            creep_grid,
             record_s,
         },
         duration,

@@ -91,7 +91,8 @@ fn on_a_stage_whose_hysteresis_is_an_mpim_the_full_pipeline_meets_what_the_preis
     stage.hysteresis.model = HysteresisModel::Mpim;
     stage.hysteresis.mpim.model_file = Some(file);
 
-    // The full pipeline's plant chain, as the study identifies it, from that stage's record.
+    // The full pipeline's plant chain from that stage's record, with the study's creep options
+    // (the weights on the holds; the bank to 100 s, the first of the study's candidates).
     let options = FullOptions::default();
     let record = measured(&stage, 1, &command);
     let chain = ChainOptions {
