@@ -355,6 +355,20 @@ fn main() {
             ))
         );
         println!("{}", hystcomp_experiments::beyond::summarize_beyond(&study));
+        for s in &study.learning.series {
+            let e: Vec<String> = s
+                .trials
+                .iter()
+                .map(|t| format!("{:.4}", t.indices.e_rms_percent))
+                .collect();
+            println!("learning {} / {}: {}", s.trajectory, s.start, e.join(" "));
+            if let Some(best) = s.best_within(20) {
+                println!(
+                    "   best within 20: {:.4} e_mhe {:.4}",
+                    best.indices.e_rms_percent, best.indices.e_mhe_percent
+                );
+            }
+        }
         return;
     }
     let hyst = IdentificationExcitation {

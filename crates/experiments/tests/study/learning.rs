@@ -64,7 +64,7 @@ pub fn the_learning_study_measures_what_it_claims(study: &Study, summary: &Study
     let e_last = raster.trials.last().unwrap().indices.e_rms_percent;
     assert!((1.0..2.2).contains(&e_last), "{e_last}");
     // Issue 12's raster figure from the full pipeline (its vibration link lets Q reach the
-    // triangle's harmonics): e_rms <= 0.1 % within 20 trials (measured 0.057 %, met at trial
+    // triangle's harmonics): e_rms <= 0.1 % within 20 trials (measured 0.055 %, met at trial
     // 6).
     let full_raster = learning.series(RASTER, "full / ihc").unwrap();
     let best = full_raster.best_within(20).unwrap();
