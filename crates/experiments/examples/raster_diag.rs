@@ -118,6 +118,18 @@ fn main() {
             );
         }
     }
+    for trajectory in [
+        hystcomp_experiments::learning_study::PAPER,
+        hystcomp_experiments::learning_study::RASTER,
+    ] {
+        if let Some(series) = study.learning.series(trajectory, "full / ihc") {
+            println!(
+                "study learning {trajectory} full: best within 20 {:?} first meeting (0.03, 0.3) within 10 {:?}",
+                series.best_within(20).map(|p| p.indices.e_rms_percent),
+                series.first_meeting(10, 0.03, 0.3)
+            );
+        }
+    }
     if std::env::var("SHORT").is_ok() {
         return;
     }

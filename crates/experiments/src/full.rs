@@ -48,9 +48,10 @@ pub struct FullOptions {
     pub operators: usize,
     /// The inverse (DIHC) chain's play operators.
     pub inverse_operators: usize,
-    /// In the speed study, the trajectory the chain inverts is low-passed with zero phase at
-    /// this frequency, Hz ([`crate::band_limit`]; indices against the trajectory itself);
-    /// `None` inverts it whole. Meant as the top of the band the vibration link was
+    /// In the speed study, the chain's vibration inverse is limited to this band, Hz
+    /// (`hystcomp_io::compensator::ScaledCompensator::with_inverse_band`: the known trajectory
+    /// low-passed with zero phase before it is inverted; indices against the trajectory
+    /// itself); `None` inverts it whole. Meant as the top of the band the vibration link was
     /// identified on.
     pub inverse_band_hz: Option<f64>,
 }

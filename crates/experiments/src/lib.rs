@@ -9,7 +9,6 @@
 
 #![warn(missing_docs)]
 
-pub mod band_limit;
 pub mod beyond;
 mod beyond_report;
 pub mod chain_excitation;

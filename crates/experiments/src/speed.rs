@@ -24,7 +24,6 @@ use rayon::prelude::*;
 use serde::Serialize;
 
 use crate::TrackingIndices;
-use crate::band_limit::zero_phase_low_pass;
 use crate::signals::{PaperTrajectory, Raster, Shape, Signal};
 use crate::study::{Approach, StudyError, track};
 
@@ -122,28 +121,6 @@ fn window_limited_share(
     Ok((whole - before) as f64 / (command.len() - from).max(1) as f64)
 }
 
-/// The command `approach` sends for `desired`: a chain with a vibration link inverts the
-/// trajectory low-passed at `band_hz` (zero phase, [`crate::band_limit`]) when one is given.
-fn command(
-    approach: &Approach<'_>,
-    desired: &[f64],
-    full_scale: f64,
-    band_hz: Option<f64>,
-    sample_rate_hz: f64,
-) -> Result<Vec<f64>, StudyError> {
-    let vibration = approach
-        .model
-        .is_some_and(|(model, _)| model.vibration.is_some());
-    let (command, _) = match band_hz {
-        Some(band) if vibration => approach.command(
-            &zero_phase_low_pass(desired, band, sample_rate_hz),
-            full_scale,
-        )?,
-        _ => approach.command(desired, full_scale)?,
-    };
-    Ok(command)
-}
-
 fn runs(
     stage: &StageConfig,
     seed: u64,
@@ -156,7 +133,7 @@ fn runs(
     approaches
         .par_iter()
         .map(|approach| {
-            let command = command(approach, desired, full_scale, band_hz, stage.sample_rate_hz)?;
+            let (command, _) = approach.command_in_band(desired, full_scale, band_hz)?;
             let limited_share = window_limited_share(stage, &command, from)?;
             let measured = track(stage, seed, &command)?;
             Ok(SpeedRun {
@@ -201,7 +178,7 @@ pub(crate) fn run_speed(
             };
             for _ in 0..MAX_REDUCTIONS {
                 let (desired, _, from) = make(scale)?;
-                let command = command(judge, &desired, full_scale, band_hz, fs)?;
+                let (command, _) = judge.command_in_band(&desired, full_scale, band_hz)?;
                 if window_limited_share(stage, &command, from)? == 0.0 {
                     break;
                 }

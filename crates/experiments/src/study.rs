@@ -1000,8 +1000,20 @@ impl<'a> Approach<'a> {
         desired: &[f64],
         full_scale: f64,
     ) -> Result<(Vec<f64>, u64), StudyError> {
+        self.command_in_band(desired, full_scale, None)
+    }
+
+    /// As [`Approach::command`], a chain's vibration inverse limited to `band_hz`.
+    pub(crate) fn command_in_band(
+        &self,
+        desired: &[f64],
+        full_scale: f64,
+        band_hz: Option<f64>,
+    ) -> Result<(Vec<f64>, u64), StudyError> {
         match self.model {
-            Some((model, method)) => drive(model, method, desired, full_scale, &self.label),
+            Some((model, method)) => {
+                drive_in_band(model, method, desired, full_scale, band_hz, &self.label)
+            }
             None => Ok((desired.iter().map(|y| y * self.gain).collect(), 0)),
         }
     }
@@ -1072,11 +1084,26 @@ pub(crate) fn drive(
     full_scale: f64,
     label: &str,
 ) -> Result<(Vec<f64>, u64), StudyError> {
+    drive_in_band(model, method, desired, full_scale, None, label)
+}
+
+/// As [`drive`], a chain's vibration inverse limited to `band_hz`
+/// (`ScaledCompensator::with_inverse_band`).
+pub(crate) fn drive_in_band(
+    model: &ModelFile,
+    method: Method,
+    desired: &[f64],
+    full_scale: f64,
+    band_hz: Option<f64>,
+    label: &str,
+) -> Result<(Vec<f64>, u64), StudyError> {
     let error = |error| StudyError::Compensator {
         run: label.to_string(),
         error,
     };
-    let mut c = ScaledCompensator::new(model, method, Some((0.0, full_scale))).map_err(error)?;
+    let mut c = ScaledCompensator::new(model, method, Some((0.0, full_scale)))
+        .and_then(|c| c.with_inverse_band(band_hz))
+        .map_err(error)?;
     let mut out = vec![0.0; desired.len()];
     c.process(desired, &mut out).map_err(error)?;
     // Unreachable positions, and reachable ones where a delayed loop hit a limit (ringing).

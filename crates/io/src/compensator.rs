@@ -163,6 +163,13 @@ pub enum CompensatorError {
     },
     /// The core refused the model (not invertible, ...).
     Core(CoreError),
+    /// The inverse's band is not finite or not between 0 and the Nyquist frequency.
+    InvalidBand {
+        /// The band asked for, Hz.
+        band_hz: f64,
+        /// The model's Nyquist frequency, Hz.
+        nyquist_hz: f64,
+    },
 }
 
 impl fmt::Display for CompensatorError {
@@ -198,6 +205,14 @@ impl fmt::Display for CompensatorError {
                 "output limits [{min}, {max}] {unit} are invalid: both must be finite and min < max"
             ),
             CompensatorError::Core(e) => write!(f, "{e}"),
+            CompensatorError::InvalidBand {
+                band_hz,
+                nyquist_hz,
+            } => write!(
+                f,
+                "the vibration inverse's band {band_hz} Hz is invalid: give a frequency between \
+                 0 and the model's Nyquist frequency {nyquist_hz} Hz"
+            ),
         }
     }
 }
@@ -257,6 +272,11 @@ pub struct ScaledCompensator {
     /// The vibration inverse's preview, samples (0 without a vibration link): `step`'s output
     /// lags its input by it.
     preview: usize,
+    /// With a vibration link: the band, Hz, a known trajectory is low-passed to before the
+    /// offline inversion ([`ScaledCompensator::with_inverse_band`]).
+    inverse_band_hz: Option<f64>,
+    /// The chain's sample rate, Hz (`None` without creep or vibration links).
+    sample_rate_hz: Option<f64>,
 }
 
 impl fmt::Debug for ScaledCompensator {
@@ -416,7 +436,53 @@ impl ScaledCompensator {
             guard_relaxation,
             desired_range,
             preview: preview_samples,
+            inverse_band_hz: None,
+            sample_rate_hz: model.sample_rate_hz,
         })
+    }
+
+    /// With a vibration link: the whole known trajectory [`ScaledCompensator::process`] (and
+    /// [`ScaledCompensator::band_limited`]) inverts is first low-passed with zero phase at
+    /// `band_hz` (`hystcomp_io::band_limit`; `None`: inverted whole, the default). Meant as
+    /// the top of the band the vibration link was identified on: above it the link's inverse
+    /// extrapolates and asks drive the amplifier may not have. Streaming ([`step`]) is not
+    /// filtered. Refuses a band that is not finite or not between 0 and the Nyquist frequency
+    /// of the model's sample rate; ignored without a vibration link.
+    ///
+    /// [`step`]: ScaledCompensator::step
+    pub fn with_inverse_band(mut self, band_hz: Option<f64>) -> Result<Self, CompensatorError> {
+        if let (Some(band), Some(rate)) = (band_hz, self.sample_rate_hz) {
+            if !(band.is_finite() && band > 0.0 && band < 0.5 * rate) {
+                return Err(CompensatorError::InvalidBand {
+                    band_hz: band,
+                    nyquist_hz: 0.5 * rate,
+                });
+            }
+        }
+        self.inverse_band_hz = band_hz.filter(|_| self.has_vibration());
+        Ok(self)
+    }
+
+    fn has_vibration(&self) -> bool {
+        matches!(&self.inner, Inner::Chain(c) if c.vibration().is_some())
+    }
+
+    /// The band of [`ScaledCompensator::with_inverse_band`], if one applies.
+    pub fn inverse_band_hz(&self) -> Option<f64> {
+        self.inverse_band_hz
+    }
+
+    /// The known trajectory `desired` as the offline inversion inverts it: low-passed with
+    /// zero phase at [`ScaledCompensator::inverse_band_hz`] when a band applies (and every
+    /// sample is finite: a non-finite one is left for the compensator to report), else as
+    /// it is.
+    pub fn band_limited(&self, desired: &[f64]) -> Vec<f64> {
+        match (self.inverse_band_hz, self.sample_rate_hz) {
+            (Some(band), Some(rate)) if desired.iter().all(|d| d.is_finite()) => {
+                crate::band_limit::zero_phase_low_pass(desired, band, rate)
+            }
+            _ => desired.to_vec(),
+        }
     }
 
     /// With a creep link: takes the stage as having rested long at the displacement
@@ -517,6 +583,13 @@ impl ScaledCompensator {
                 found: control.len(),
             }));
         }
+        let filtered;
+        let desired = if self.inverse_band_hz.is_some() {
+            filtered = self.band_limited(desired);
+            &filtered[..]
+        } else {
+            desired
+        };
         let Some(&last) = desired.last() else {
             return Ok(());
         };

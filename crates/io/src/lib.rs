@@ -10,6 +10,7 @@
 //! - [`bank`]: model sets (many channels' models) and the compensator bank built from one.
 
 pub mod atomic;
+pub mod band_limit;
 pub mod bank;
 pub mod bounded;
 pub mod compensator;

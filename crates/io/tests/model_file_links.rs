@@ -180,3 +180,90 @@ fn a_settled_prediction_and_compensator_start_at_rest_where_the_record_starts() 
     let drive: Vec<f64> = (0..3000).map(|_| relaxed.step(40.0)).collect();
     assert!((drive[2999] - drive[0]).abs() > 1e-3);
 }
+
+#[test]
+fn the_band_limited_inversion_inverts_the_trajectory_low_passed_and_nothing_else() {
+    // On random reachable trajectories with content above the band: the drive is the whole
+    // inversion of the trajectory low-passed with zero phase, the prediction of that drive
+    // follows the low-passed trajectory (not the original), and the band is refused outside
+    // (0, Nyquist) and ignored without a vibration link.
+    let file = full();
+    // A seeded stream of numbers in [0, 1) (splitmix64).
+    let mut state = 5u64;
+    let mut random = move || {
+        state = state.wrapping_add(0x9E37_79B9_7F4A_7C15);
+        let mut z = state;
+        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+        (z ^ (z >> 31)) as f64 / u64::MAX as f64
+    };
+    for case in 0..4 {
+        let f1 = 0.5 + random();
+        let f2 = 150.0 + 200.0 * random();
+        let volts: Vec<f64> = (0..3000)
+            .map(|k| {
+                let t = k as f64 * 1e-3;
+                let rise = 0.5 - 0.5 * (std::f64::consts::PI * (t / 0.5).min(1.0)).cos();
+                rise * (5.0
+                    + 3.0 * (2.0 * std::f64::consts::PI * f1 * t).sin()
+                    + 0.3 * (2.0 * std::f64::consts::PI * f2 * t).sin())
+            })
+            .collect();
+        let desired = file.predict(&volts).unwrap();
+        let band = 40.0 + 60.0 * random();
+        let mut limited = ScaledCompensator::new(&file, Method::Ihc, None)
+            .unwrap()
+            .with_inverse_band(Some(band))
+            .unwrap();
+        assert_eq!(limited.inverse_band_hz(), Some(band));
+        let filtered = limited.band_limited(&desired);
+        assert_eq!(
+            filtered,
+            hystcomp_io::band_limit::zero_phase_low_pass(&desired, band, 1000.0)
+        );
+        let mut drive = vec![0.0; desired.len()];
+        limited.process(&desired, &mut drive).unwrap();
+        let mut whole = ScaledCompensator::new(&file, Method::Ihc, None).unwrap();
+        let mut reference = vec![0.0; desired.len()];
+        whole.process(&filtered, &mut reference).unwrap();
+        assert_eq!(drive, reference, "case {case}");
+        let reached = file.predict(&drive).unwrap();
+        let off_filtered = reached
+            .iter()
+            .zip(&filtered)
+            .skip(1)
+            .map(|(a, b)| (a - b).abs())
+            .fold(0.0, f64::max);
+        let off_desired = reached
+            .iter()
+            .zip(&desired)
+            .map(|(a, b)| (a - b).abs())
+            .fold(0.0, f64::max);
+        // Up to the drive limits' clamping where the low-passed trajectory leaves the reach
+        // (about 32 samples at its start, counted as saturated).
+        assert!(
+            off_filtered < 0.01 && off_desired > 10.0 * off_filtered,
+            "case {case}: {off_filtered} {off_desired}"
+        );
+    }
+    for bad in [0.0, -5.0, 500.0, 800.0, f64::NAN, f64::INFINITY] {
+        let refused = ScaledCompensator::new(&file, Method::Ihc, None)
+            .unwrap()
+            .with_inverse_band(Some(bad));
+        assert!(
+            refused
+                .as_ref()
+                .is_err_and(|e| e.to_string().contains("Nyquist frequency 500 Hz")),
+            "{bad}: {:?}",
+            refused.map(|c| c.inverse_band_hz())
+        );
+    }
+    let creep_only = table1().with_links(1000.0, Some(creep()), None).unwrap();
+    let plain = ScaledCompensator::new(&creep_only, Method::Ihc, None)
+        .unwrap()
+        .with_inverse_band(Some(50.0))
+        .unwrap();
+    assert_eq!(plain.inverse_band_hz(), None);
+    let x = vec![1.0, 2.0, 30.0, 2.0];
+    assert_eq!(plain.band_limited(&x), x);
+}

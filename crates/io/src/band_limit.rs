@@ -6,10 +6,17 @@
 //! no phase and no delay. Each pass starts at rest at its first sample, so a trajectory that
 //! starts and ends at rest is not disturbed at its ends.
 //!
-//! The speed study band-limits the trajectory the `full` pipeline inverts to the band its
-//! vibration link was identified on ([`crate::full::FullOptions::inverse_band_hz`]): above
-//! it the link's inverse is an extrapolation, and on the 20 um raster at 100 Hz the faithful
-//! inverse asks three times the amplifier's slew rate for content the stage barely passes.
+//! [`crate::compensator::ScaledCompensator::with_inverse_band`] band-limits the known
+//! trajectory a chain's vibration inverse inverts offline to the band its vibration link was
+//! identified on: above it the link's inverse is an extrapolation, and on the study's 20 um
+//! raster at 100 Hz the faithful inverse asks three times the amplifier's slew rate for content
+//! the stage barely passes. This is the band-limited inversion of inversion-based feedforward
+//! (Q. Zou, S. Devasia, "Preview-based optimal inversion for output tracking: application to
+//! scanning tunneling microscopy", IEEE Trans. Control Syst. Technol. 12 (2004) 375-386,
+//! doi:10.1109/TCST.2004.824339; K. K. Leang, S. Devasia, "Feedback-linearized inverse
+//! feedforward for creep, hysteresis, and vibration compensation in AFM piezoactuators", IEEE
+//! Trans. Control Syst. Technol. 15 (2007) 927-935, doi:10.1109/TCST.2007.902956), here with
+//! the simplest filter: the inverse is applied to the trajectory's content within the band.
 
 /// `x` low-passed at `cutoff_hz` with zero phase, at `sample_rate_hz`. `cutoff_hz` must lie
 /// strictly between 0 and the Nyquist frequency (else the signal is returned as it is).
