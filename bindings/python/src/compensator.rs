@@ -37,12 +37,12 @@ pub(crate) fn parse_method(method: &str) -> PyResult<Method> {
 }
 
 fn check_limits(limits: Option<(f64, f64)>) -> PyResult<()> {
-    if let Some((lo, hi)) = limits {
-        if !(lo.is_finite() && hi.is_finite() && lo < hi) {
-            return Err(invalid(format!(
-                "limits ({lo}, {hi}) are invalid: give finite (min, max) with min < max"
-            )));
-        }
+    if let Some((lo, hi)) = limits
+        && !(lo.is_finite() && hi.is_finite() && lo < hi)
+    {
+        return Err(invalid(format!(
+            "limits ({lo}, {hi}) are invalid: give finite (min, max) with min < max"
+        )));
     }
     Ok(())
 }

@@ -85,18 +85,18 @@ pub fn summarize_beyond(study: &Study) -> BeyondSummary {
         ));
     }
     for series in &study.duration.series {
-        if series.label.starts_with("full") {
-            if let Some(i) = series.at(study.duration.duration_s) {
-                checks.push(check(
-                    format!(
-                        "{}: e_rms over {} s (last period)",
-                        series.label, study.duration.duration_s
-                    ),
-                    i.e_rms_percent,
-                    0.30,
-                    "%",
-                ));
-            }
+        if series.label.starts_with("full")
+            && let Some(i) = series.at(study.duration.duration_s)
+        {
+            checks.push(check(
+                format!(
+                    "{}: e_rms over {} s (last period)",
+                    series.label, study.duration.duration_s
+                ),
+                i.e_rms_percent,
+                0.30,
+                "%",
+            ));
         }
     }
     for hold in &study.duration.hold {

@@ -648,13 +648,13 @@ fn prepare<'a>(panel: &'a Panel<'a>, plot_px: f64) -> Result<PreparedPanel<'a>, 
     let mut points = Vec::with_capacity(panel.series.len());
     for s in &panel.series {
         validate_series(s)?;
-        if panel.log_y {
-            if let Some(index) = s.y.iter().position(|&y| y <= 0.0) {
-                return Err(FigureError::NotPositive {
-                    series: s.label.to_string(),
-                    index,
-                });
-            }
+        if panel.log_y
+            && let Some(index) = s.y.iter().position(|&y| y <= 0.0)
+        {
+            return Err(FigureError::NotPositive {
+                series: s.label.to_string(),
+                index,
+            });
         }
         let kept = decimate_min_max_indices(s.y, panel.max_points)?;
         points.push(

@@ -220,10 +220,11 @@ pub(crate) fn learning_section(
                 panel = panel.with_styled_series(label, x, y, style_of(label));
             }
         }
-        if let Some((x, y)) = &floor {
-            if y.iter().all(|v| v.is_finite()) && y.len() >= 2 {
-                panel = panel.with_styled_series("sensor noise floor", x, y, SeriesStyle::DESIRED);
-            }
+        if let Some((x, y)) = &floor
+            && y.iter().all(|v| v.is_finite())
+            && y.len() >= 2
+        {
+            panel = panel.with_styled_series("sensor noise floor", x, y, SeriesStyle::DESIRED);
         }
         let written = figures::write_panel_figure(dir, stem, &panel)?;
         files.extend([written.png.clone(), written.svg.clone()]);

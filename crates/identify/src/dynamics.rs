@@ -181,10 +181,10 @@ pub fn fit_dynamics(
     let mut best_delay = (0, f64::INFINITY);
     for d in 0..=options.max_delay_samples {
         for (n, m) in [(0, 1), (2, 3)] {
-            if let Some(rms) = score(d, n, m, &mut candidates) {
-                if rms < best_delay.1 {
-                    best_delay = (d, rms);
-                }
+            if let Some(rms) = score(d, n, m, &mut candidates)
+                && rms < best_delay.1
+            {
+                best_delay = (d, rms);
             }
         }
     }

@@ -292,24 +292,24 @@ pub fn identify_observed(
         )
         .expect("the held-out span is not empty")
     });
-    if let Some(limit) = options.max_fit_rms_percent {
-        if fit_stats.rms_percent.is_nan() || fit_stats.rms_percent > limit {
-            // A swarm far from the optimum is not bad data: say so, with the optimum beside it.
-            if let Method::ParticleSwarm(_) = options.method
-                && let Ok(ls) = LeastSquares.solve(&problem, &mut NoObserver)
-                && 100.0 * ls.cost <= limit
-            {
-                return Err(IdentifyError::SwarmNotConverged {
-                    rms_percent: fit_stats.rms_percent,
-                    least_squares_rms_percent: 100.0 * ls.cost,
-                    limit,
-                });
-            }
-            return Err(IdentifyError::PoorFit {
+    if let Some(limit) = options.max_fit_rms_percent
+        && (fit_stats.rms_percent.is_nan() || fit_stats.rms_percent > limit)
+    {
+        // A swarm far from the optimum is not bad data: say so, with the optimum beside it.
+        if let Method::ParticleSwarm(_) = options.method
+            && let Ok(ls) = LeastSquares.solve(&problem, &mut NoObserver)
+            && 100.0 * ls.cost <= limit
+        {
+            return Err(IdentifyError::SwarmNotConverged {
                 rms_percent: fit_stats.rms_percent,
+                least_squares_rms_percent: 100.0 * ls.cost,
                 limit,
             });
         }
+        return Err(IdentifyError::PoorFit {
+            rms_percent: fit_stats.rms_percent,
+            limit,
+        });
     }
 
     let input_scale = Scale {

@@ -284,11 +284,10 @@ impl QuadraticProgram {
                 .iter()
                 .enumerate()
                 .min_by(|a, b| a.1.total_cmp(b.1))
+                && mu < -multiplier_tolerance
             {
-                if mu < -multiplier_tolerance {
-                    active.remove(k);
-                    continue;
-                }
+                active.remove(k);
+                continue;
             }
             let worst = (0..self.rows.len())
                 .filter(|j| !active.contains(j))

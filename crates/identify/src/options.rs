@@ -314,24 +314,24 @@ impl IdentifyOptions {
                 reason: "give a condition number > 1, e.g. 1e10".to_owned(),
             });
         }
-        if let Some(limit) = self.max_fit_rms_percent {
-            if !(limit.is_finite() && limit > 0.0) {
-                return Err(IdentifyError::InvalidOption {
-                    option: "largest fit RMS",
-                    value: Shown(limit).to_string(),
-                    reason: "give a positive percentage of the output range (the default is 10)"
-                        .to_owned(),
-                });
-            }
+        if let Some(limit) = self.max_fit_rms_percent
+            && !(limit.is_finite() && limit > 0.0)
+        {
+            return Err(IdentifyError::InvalidOption {
+                option: "largest fit RMS",
+                value: Shown(limit).to_string(),
+                reason: "give a positive percentage of the output range (the default is 10)"
+                    .to_owned(),
+            });
         }
-        if let OutputOffset::Value(v) = self.offset {
-            if !v.is_finite() {
-                return Err(IdentifyError::InvalidOption {
-                    option: "offset",
-                    value: Shown(v).to_string(),
-                    reason: "give fit, none or a finite number".to_owned(),
-                });
-            }
+        if let OutputOffset::Value(v) = self.offset
+            && !v.is_finite()
+        {
+            return Err(IdentifyError::InvalidOption {
+                option: "offset",
+                value: Shown(v).to_string(),
+                reason: "give fit, none or a finite number".to_owned(),
+            });
         }
         for (option, unit) in [
             ("voltage unit", &self.voltage_unit),

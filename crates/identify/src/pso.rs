@@ -518,13 +518,13 @@ impl Solver for ParticleSwarm {
                 o.seed
             ),
         );
-        if o.polish {
-            if let Some(mut polished) = polish_from(problem, &theta) {
-                let feasible = polished.violation <= FEASIBILITY_TOLERANCE * problem.margin();
-                if feasible && (swarm.violation > 0.0 || polished.cost <= swarm.cost) {
-                    polished.detail = format!("{}, then {}", swarm.detail, polished.detail);
-                    return Ok(polished);
-                }
+        if o.polish
+            && let Some(mut polished) = polish_from(problem, &theta)
+        {
+            let feasible = polished.violation <= FEASIBILITY_TOLERANCE * problem.margin();
+            if feasible && (swarm.violation > 0.0 || polished.cost <= swarm.cost) {
+                polished.detail = format!("{}, then {}", swarm.detail, polished.detail);
+                return Ok(polished);
             }
         }
         if swarm.violation > 0.0 {

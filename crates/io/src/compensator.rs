@@ -451,13 +451,13 @@ impl ScaledCompensator {
     ///
     /// [`step`]: ScaledCompensator::step
     pub fn with_inverse_band(mut self, band_hz: Option<f64>) -> Result<Self, CompensatorError> {
-        if let (Some(band), Some(rate)) = (band_hz, self.sample_rate_hz) {
-            if !(band.is_finite() && band > 0.0 && band < 0.5 * rate) {
-                return Err(CompensatorError::InvalidBand {
-                    band_hz: band,
-                    nyquist_hz: 0.5 * rate,
-                });
-            }
+        if let (Some(band), Some(rate)) = (band_hz, self.sample_rate_hz)
+            && !(band.is_finite() && band > 0.0 && band < 0.5 * rate)
+        {
+            return Err(CompensatorError::InvalidBand {
+                band_hz: band,
+                nyquist_hz: 0.5 * rate,
+            });
         }
         self.inverse_band_hz = band_hz.filter(|_| self.has_vibration());
         Ok(self)

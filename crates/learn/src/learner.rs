@@ -401,25 +401,25 @@ impl Learner {
         let trial = self.history.len();
         self.history.push(indices);
         let e_rms = indices.e_rms_percent;
-        if let Some((best_trial, best_e_rms, best_drive)) = &self.best {
-            if e_rms > self.options.divergence_factor * best_e_rms {
-                let status = Status::Diverged {
-                    e_rms_percent: e_rms,
-                    best_trial: *best_trial,
-                    best_e_rms_percent: *best_e_rms,
-                    factor: self.options.divergence_factor,
-                };
-                self.drive = best_drive.clone();
-                self.reference = self.forward(&self.drive)?;
-                self.stopped = Some((trial, *best_trial));
-                return Ok(Update {
-                    trial,
-                    indices,
-                    predicted: None,
-                    clamped_samples: 0,
-                    status,
-                });
-            }
+        if let Some((best_trial, best_e_rms, best_drive)) = &self.best
+            && e_rms > self.options.divergence_factor * best_e_rms
+        {
+            let status = Status::Diverged {
+                e_rms_percent: e_rms,
+                best_trial: *best_trial,
+                best_e_rms_percent: *best_e_rms,
+                factor: self.options.divergence_factor,
+            };
+            self.drive = best_drive.clone();
+            self.reference = self.forward(&self.drive)?;
+            self.stopped = Some((trial, *best_trial));
+            return Ok(Update {
+                trial,
+                indices,
+                predicted: None,
+                clamped_samples: 0,
+                status,
+            });
         }
         if self.best.as_ref().is_none_or(|(_, b, _)| e_rms <= *b) {
             self.best = Some((trial, e_rms, self.drive.clone()));

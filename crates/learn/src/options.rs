@@ -117,17 +117,17 @@ impl LearningOptions {
                 ),
             );
         }
-        if let Some(fc) = self.bandwidth_hz {
-            if !(fc.is_finite() && fc > 0.0 && fc <= fs / 2.0) {
-                return bad(
-                    "bandwidth",
-                    Shown(fc).to_string(),
-                    format!(
-                        "give a cut-off in Hz above 0 and at most half the sample rate ({})",
-                        fs / 2.0
-                    ),
-                );
-            }
+        if let Some(fc) = self.bandwidth_hz
+            && !(fc.is_finite() && fc > 0.0 && fc <= fs / 2.0)
+        {
+            return bad(
+                "bandwidth",
+                Shown(fc).to_string(),
+                format!(
+                    "give a cut-off in Hz above 0 and at most half the sample rate ({})",
+                    fs / 2.0
+                ),
+            );
         }
         if !(1..=MAX_FILTER_ORDER).contains(&self.filter_order) {
             return bad(
@@ -153,14 +153,14 @@ impl LearningOptions {
                 ),
             );
         }
-        if let Some((lo, hi)) = self.limits {
-            if !(lo.is_finite() && hi.is_finite() && lo < hi) {
-                return bad(
-                    "drive limits",
-                    format!("{lo} .. {hi}"),
-                    "both must be finite and the lower below the upper".into(),
-                );
-            }
+        if let Some((lo, hi)) = self.limits
+            && !(lo.is_finite() && hi.is_finite() && lo < hi)
+        {
+            return bad(
+                "drive limits",
+                format!("{lo} .. {hi}"),
+                "both must be finite and the lower below the upper".into(),
+            );
         }
         if self.mhe_bins == 0 {
             return bad("e_mhe bins", "0".into(), "give at least 1".into());

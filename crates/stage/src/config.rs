@@ -437,10 +437,10 @@ impl StageConfig {
         let text = String::from_utf8(bytes).map_err(|e| io(format!("not UTF-8 text ({e})")))?;
         let mut config = StageConfig::from_toml_str(&text)?;
         // A model file named relative to the stage file is found beside it.
-        if let (Some(file), Some(dir)) = (&config.hysteresis.mpim.model_file, path.parent()) {
-            if file.is_relative() {
-                config.hysteresis.mpim.model_file = Some(dir.join(file));
-            }
+        if let (Some(file), Some(dir)) = (&config.hysteresis.mpim.model_file, path.parent())
+            && file.is_relative()
+        {
+            config.hysteresis.mpim.model_file = Some(dir.join(file));
         }
         Ok(config)
     }

@@ -164,12 +164,12 @@ impl ChainArgs {
 
 /// The record's sample rate: from the time column (its mean step), or --sample-rate.
 fn sample_rate(columns: &ColumnArgs, loaded: &Loaded) -> Result<f64, CliError> {
-    if let Some(time) = &loaded.time {
-        if time.len() >= 2 {
-            let step = (time[time.len() - 1] - time[0]) / (time.len() - 1) as f64;
-            if step > 0.0 && step.is_finite() {
-                return Ok(1.0 / step);
-            }
+    if let Some(time) = &loaded.time
+        && time.len() >= 2
+    {
+        let step = (time[time.len() - 1] - time[0]) / (time.len() - 1) as f64;
+        if step > 0.0 && step.is_finite() {
+            return Ok(1.0 / step);
         }
     }
     match columns.sample_rate {

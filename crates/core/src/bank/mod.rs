@@ -230,7 +230,7 @@ pub fn check_signal(
     control: usize,
     output: &'static str,
 ) -> Result<(), CoreError> {
-    if desired % channels.max(1) != 0 {
+    if !desired.is_multiple_of(channels.max(1)) {
         return Err(CoreError::ChannelCount {
             what: "desired positions",
             channels,

@@ -498,10 +498,10 @@ fn validate(data: &ReportData) -> Result<(), ReportError> {
         validate_section(section)?;
     }
     for b in &data.acceptance {
-        if let Some(name) = &b.pipeline {
-            if !names.contains(name.as_str()) {
-                return Err(ReportError::UnknownPipeline(name.clone()));
-            }
+        if let Some(name) = &b.pipeline
+            && !names.contains(name.as_str())
+        {
+            return Err(ReportError::UnknownPipeline(name.clone()));
         }
         let finite = |v: Option<f64>| v.is_none_or(f64::is_finite);
         if (b.min_percent.is_none() && b.max_percent.is_none())
@@ -537,13 +537,13 @@ fn validate_section(section: &TextSection) -> Result<(), ReportError> {
             section.id
         ));
     }
-    if let Some(name) = &section.template {
-        if !view::has_study_template(name) {
-            return bad(format!(
-                "names the template {name:?}, which is not in templates/studies (see TEMPLATES in \
+    if let Some(name) = &section.template
+        && !view::has_study_template(name)
+    {
+        return bad(format!(
+            "names the template {name:?}, which is not in templates/studies (see TEMPLATES in \
                  report/view.rs)"
-            ));
-        }
+        ));
     }
     for table in &section.tables {
         if !plain_id(&table.id) {

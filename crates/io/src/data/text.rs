@@ -154,11 +154,12 @@ fn content_lines(text: &str) -> (String, Vec<usize>, Option<Delimiter>) {
         if is_skipped_line(line) {
             continue;
         }
-        if line_numbers.is_empty() && separator.is_none() {
-            if let Some(delimiter) = separator_line(line) {
-                separator = Some(delimiter);
-                continue;
-            }
+        if line_numbers.is_empty()
+            && separator.is_none()
+            && let Some(delimiter) = separator_line(line)
+        {
+            separator = Some(delimiter);
+            continue;
         }
         content.push_str(line);
         content.push('\n');

@@ -144,16 +144,15 @@ fn check_header_names(header: &[&str], columns: usize, delimiter: Delimiter) -> 
             header[0]
         ));
     }
-    if delimiter == Delimiter::Whitespace {
-        if let Some(name) = header
+    if delimiter == Delimiter::Whitespace
+        && let Some(name) = header
             .iter()
             .find(|n| n.is_empty() || n.contains(char::is_whitespace) || n.contains('"'))
-        {
-            return Err(format!(
-                "the column name \"{name}\" is empty or contains spaces or quotes, which \
+    {
+        return Err(format!(
+            "the column name \"{name}\" is empty or contains spaces or quotes, which \
                  whitespace-separated files cannot hold; use another delimiter or name"
-            ));
-        }
+        ));
     }
     if header
         .iter()

@@ -105,7 +105,7 @@ impl Out {
         self.bytes.extend_from_slice(&b);
     }
     fn pad8(&mut self) {
-        while self.bytes.len() % 8 != 0 {
+        while !self.bytes.len().is_multiple_of(8) {
             self.bytes.push(0);
         }
     }

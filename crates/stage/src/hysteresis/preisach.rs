@@ -153,7 +153,9 @@ impl PreisachHysteresis {
         let u = self.input;
         match self.turns.last() {
             None => self.everett(u, 0.0),
-            Some(last) if self.turns.len() % 2 == 0 => last.output + self.everett(u, last.value),
+            Some(last) if self.turns.len().is_multiple_of(2) => {
+                last.output + self.everett(u, last.value)
+            }
             Some(last) => last.output - self.everett(last.value, u),
         }
     }
@@ -175,7 +177,7 @@ impl PreisachHysteresis {
         if u == previous {
             return;
         }
-        let ascending = self.turns.len() % 2 == 0;
+        let ascending = self.turns.len().is_multiple_of(2);
         // A reversal: the previous input becomes a turning point.
         if (ascending && u < previous) || (!ascending && u > previous) {
             self.push(previous);
@@ -186,7 +188,7 @@ impl PreisachHysteresis {
             let len = self.turns.len();
             let wiped = if len == 0 {
                 false
-            } else if len % 2 == 0 {
+            } else if len.is_multiple_of(2) {
                 u >= self.turns[len - 2].value
             } else if len == 1 {
                 u <= 0.0
