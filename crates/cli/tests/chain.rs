@@ -322,28 +322,33 @@ fn identify_compensate_and_crossval_take_the_full_model() {
     );
 
     // crossval: the chains' reports beside the usual one.
-    let out = hystcomp(&[
-        "--json",
-        "crossval",
-        "--train",
-        s(&data),
-        "--test",
-        s(&data),
-        "--voltage-column",
-        "command_v",
-        "--displacement-column",
-        "measured_um",
-        "--time-column",
-        "time_s",
-        "--model-structure",
-        "full",
-        "--dynamics-from",
-        &from,
-        "--dynamics-to",
-        &to,
-        "--decimation",
-        "2",
-    ]);
+    let crossval = |test: &Path| -> Vec<String> {
+        [
+            "crossval",
+            "--train",
+            s(&data),
+            "--test",
+            s(test),
+            "--voltage-column",
+            "command_v",
+            "--displacement-column",
+            "measured_um",
+            "--time-column",
+            "time_s",
+            "--model-structure",
+            "full",
+            "--dynamics-from",
+            &from,
+            "--dynamics-to",
+            &to,
+        ]
+        .map(str::to_owned)
+        .to_vec()
+    };
+    let mut args = vec!["--json".to_owned()];
+    args.extend(crossval(&data));
+    args.extend(["--decimation".to_owned(), "2".to_owned()]);
+    let out = hystcomp(&args.iter().map(String::as_str).collect::<Vec<_>>());
     assert!(out.status.success(), "{}", stderr(&out));
     let json: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
     assert_eq!(
@@ -368,25 +373,10 @@ fn identify_compensate_and_crossval_take_the_full_model() {
     }
     std::fs::write(&slow, text).unwrap();
     assert_fails(
-        &[
-            "crossval",
-            "--train",
-            s(&data),
-            "--test",
-            s(&slow),
-            "--voltage-column",
-            "command_v",
-            "--displacement-column",
-            "measured_um",
-            "--time-column",
-            "time_s",
-            "--model-structure",
-            "full",
-            "--dynamics-from",
-            &from,
-            "--dynamics-to",
-            &to,
-        ],
+        &crossval(&slow)
+            .iter()
+            .map(String::as_str)
+            .collect::<Vec<_>>(),
         &["sampled at 1000 Hz, the training record at 2000 Hz; creep and vibration"],
     );
     // Creep and vibration need the sample rate.

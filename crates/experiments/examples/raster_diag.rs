@@ -271,7 +271,7 @@ fn main() {
         let pct = |m: &[f64]| 100.0 * rms(&m[from..], &desired[from..]) / span;
         for fc in [0.0, 2500.0, 2000.0, 1500.0, 1200.0, 1000.0, 800.0] {
             let filtered = if fc > 0.0 {
-                filtfilt(&desired, fc, fs)
+                hystcomp_io::band_limit::zero_phase_low_pass(&desired, fc, fs)
             } else {
                 desired.clone()
             };
@@ -380,33 +380,4 @@ fn main() {
 
 fn pct_pair(a: &[f64], b: &[f64], from: usize, span: f64) -> f64 {
     100.0 * rms(&a[from..], &b[from..]) / span
-}
-
-/// Zero-phase second-order Butterworth low-pass (forward and backward, bilinear transform).
-fn filtfilt(x: &[f64], fc: f64, fs: f64) -> Vec<f64> {
-    let k = (std::f64::consts::PI * fc / fs).tan();
-    let q = std::f64::consts::FRAC_1_SQRT_2;
-    let norm = 1.0 / (1.0 + k / q + k * k);
-    let b0 = k * k * norm;
-    let (b1, b2) = (2.0 * b0, b0);
-    let a1 = 2.0 * (k * k - 1.0) * norm;
-    let a2 = (1.0 - k / q + k * k) * norm;
-    let pass = |v: &[f64]| -> Vec<f64> {
-        let (mut x1, mut x2, mut y1, mut y2) = (v[0], v[0], v[0], v[0]);
-        v.iter()
-            .map(|&x0| {
-                let y0 = b0 * x0 + b1 * x1 + b2 * x2 - a1 * y1 - a2 * y2;
-                x2 = x1;
-                x1 = x0;
-                y2 = y1;
-                y1 = y0;
-                y0
-            })
-            .collect()
-    };
-    let mut f = pass(x);
-    f.reverse();
-    let mut b = pass(&f);
-    b.reverse();
-    b
 }
