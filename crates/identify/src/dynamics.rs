@@ -329,15 +329,8 @@ fn arx(x: &[f64], y: &[f64], d: usize, n: usize, m: usize, free: bool) -> Option
         }
         phi[(r, p - 1)] = 1.0;
     }
-    // Least squares by QR (the columns are scaled alike: differences of the same signals).
-    let qr = phi.qr();
-    let r = qr.r();
-    if (0..p).any(|i| r[(i, i)].abs() <= 1e-12 * r[(0, 0)].abs()) {
-        return None;
-    }
-    let mut rhs = target;
-    qr.q_tr_mul(&mut rhs);
-    let theta = r.solve_upper_triangular(&rhs.rows(0, p).into_owned())?;
+    // The columns are scaled alike: differences of the same signals.
+    let theta = least_squares(phi, target)?;
     let mut a = vec![1.0];
     a.extend(theta.iter().take(n));
     let mut b: Vec<f64> = theta.iter().skip(n).take(m - 1).copied().collect();
@@ -345,6 +338,20 @@ fn arx(x: &[f64], y: &[f64], d: usize, n: usize, m: usize, free: bool) -> Option
     let b_last = a_sum - b.iter().sum::<f64>();
     b.push(b_last);
     checked(a, b, d, 1.0)
+}
+
+/// The least-squares solution of `phi theta = target` by QR, or `None` when `phi` is
+/// numerically rank-deficient (a diagonal entry of `R` at most 1e-12 of the first).
+fn least_squares(phi: DMatrix<f64>, target: DVector<f64>) -> Option<DVector<f64>> {
+    let p = phi.ncols();
+    let qr = phi.qr();
+    let r = qr.r();
+    if (0..p).any(|i| r[(i, i)].abs() <= 1e-12 * r[(0, 0)].abs()) {
+        return None;
+    }
+    let mut rhs = target;
+    qr.q_tr_mul(&mut rhs);
+    r.solve_upper_triangular(&rhs.rows(0, p).into_owned())
 }
 
 /// The free-gain equation-error fit (see [`arx`]).
@@ -370,14 +377,7 @@ fn arx_free(
         }
         phi[(r, p - 1)] = 1.0;
     }
-    let qr = phi.qr();
-    let r = qr.r();
-    if (0..p).any(|i| r[(i, i)].abs() <= 1e-12 * r[(0, 0)].abs()) {
-        return None;
-    }
-    let mut rhs = target;
-    qr.q_tr_mul(&mut rhs);
-    let theta = r.solve_upper_triangular(&rhs.rows(0, p).into_owned())?;
+    let theta = least_squares(phi, target)?;
     let mut a = vec![1.0];
     a.extend(theta.iter().take(n));
     let b: Vec<f64> = theta.iter().skip(n).take(m).copied().collect();
