@@ -18,6 +18,7 @@ use hystcomp_experiments::chain_excitation::ChainExcitation;
 use hystcomp_experiments::excitation::IdentificationExcitation;
 use hystcomp_experiments::full::FullOptions;
 use hystcomp_experiments::signals::{PaperTrajectory, Raster, Shape, Signal, Steps};
+use hystcomp_experiments::speed::from_rest;
 use hystcomp_identify::{
     ChainOptions, CreepOptions, DynamicsOptions, IdentifyOptions, Thresholds, Warmup,
     identify_chain, identify_inverse_chain,
@@ -92,18 +93,6 @@ fn command(model: &ModelFile, method: Method, desired: &[f64], fs_v: f64) -> Vec
     let mut out = vec![0.0; desired.len()];
     c.process(desired, &mut out).unwrap();
     out
-}
-
-fn from_rest(trajectory: &[f64], fs: f64) -> (Vec<f64>, usize) {
-    let second = fs.round() as usize;
-    let first = trajectory[0];
-    let mut out: Vec<f64> = (1..=second)
-        .map(|k| first * 0.5 * (1.0 - (std::f64::consts::PI * k as f64 / second as f64).cos()))
-        .collect();
-    out.extend(std::iter::repeat_n(first, second));
-    let start = out.len();
-    out.extend_from_slice(trajectory);
-    (out, start)
 }
 
 /// Link-by-link comparison on `desired[from..]`.

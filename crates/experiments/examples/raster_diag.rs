@@ -7,6 +7,7 @@
 //! Not part of the study; `cargo run --release -p hystcomp-experiments --example raster_diag`.
 
 use hystcomp_experiments::signals::{Multisine, PaperTrajectory, Raster, Shape, Signal};
+use hystcomp_experiments::speed::from_rest;
 use hystcomp_experiments::{StudyOptions, run_study};
 use hystcomp_io::compensator::{Method, ScaledCompensator};
 use hystcomp_io::model_file::ModelFile;
@@ -20,17 +21,6 @@ fn range(a: &[f64]) -> f64 {
         - a.iter().copied().fold(f64::INFINITY, f64::min)
 }
 
-fn from_rest(trajectory: &[f64], fs: f64) -> Vec<f64> {
-    let second = fs.round() as usize;
-    let first = trajectory[0];
-    let mut out: Vec<f64> = (1..=second)
-        .map(|k| first * 0.5 * (1.0 - (std::f64::consts::PI * k as f64 / second as f64).cos()))
-        .collect();
-    out.extend(std::iter::repeat_n(first, second));
-    out.extend_from_slice(trajectory);
-    out
-}
-
 fn raster(rate: f64, fs: f64) -> (Vec<f64>, usize) {
     let signal = Signal {
         shape: Shape::Raster(Raster::triangle(rate, 0.05)),
@@ -40,7 +30,7 @@ fn raster(rate: f64, fs: f64) -> (Vec<f64>, usize) {
         speed: 1.0,
         sample_rate_hz: fs,
     };
-    let d = from_rest(&signal.sample().unwrap(), fs);
+    let d = from_rest(&signal.sample().unwrap(), fs).0;
     let from = d.len() - (5.0 / rate * fs).round() as usize;
     (d, from)
 }

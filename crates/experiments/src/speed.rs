@@ -85,8 +85,9 @@ pub struct SpeedStudy {
 }
 
 /// A trajectory from rest: 1 s raised cosine to its first value, 1 s there, then itself.
-/// Returns it and where the trajectory starts.
-fn from_rest(trajectory: &[f64], sample_rate_hz: f64) -> (Vec<f64>, usize) {
+/// Returns it and where the trajectory starts (the speed study's runs, and the diagnosis
+/// examples' and tests' that compare with them).
+pub fn from_rest(trajectory: &[f64], sample_rate_hz: f64) -> (Vec<f64>, usize) {
     let second = sample_rate_hz.round() as usize;
     let first = trajectory[0];
     let mut out: Vec<f64> = (1..=second)

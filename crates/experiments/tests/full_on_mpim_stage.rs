@@ -11,6 +11,7 @@ use hystcomp_experiments::chain_excitation::ChainExcitation;
 use hystcomp_experiments::excitation::IdentificationExcitation;
 use hystcomp_experiments::full::FullOptions;
 use hystcomp_experiments::signals::{PaperTrajectory, Raster, Shape, Signal, Steps};
+use hystcomp_experiments::speed::from_rest;
 use hystcomp_identify::{
     ChainOptions, DynamicsOptions, IdentifyOptions, Thresholds, Warmup, identify, identify_chain,
 };
@@ -36,18 +37,6 @@ fn rms_percent(measured: &[f64], desired: &[f64]) -> f64 {
         .map(|(m, d)| (m - d).powi(2))
         .sum();
     100.0 * (sum / desired.len() as f64).sqrt() / (hi - lo)
-}
-
-/// A 1 s raised cosine from 0 to the trajectory's first value, 1 s there, then it.
-fn from_rest(trajectory: &[f64], fs: f64) -> Vec<f64> {
-    let second = fs.round() as usize;
-    let first = trajectory[0];
-    let mut out: Vec<f64> = (1..=second)
-        .map(|k| first * 0.5 * (1.0 - (std::f64::consts::PI * k as f64 / second as f64).cos()))
-        .collect();
-    out.extend(std::iter::repeat_n(first, second));
-    out.extend_from_slice(trajectory);
-    out
 }
 
 #[test]
@@ -155,7 +144,7 @@ fn on_a_stage_whose_hysteresis_is_an_mpim_the_full_pipeline_meets_what_the_preis
     }
     .sample()
     .unwrap();
-    let desired = from_rest(&raster, fs);
+    let desired = from_rest(&raster, fs).0;
     let mut strong = stage.clone();
     strong.amplifier.peak_current_ma = 1000.0;
     let y = measured(&strong, 2, &drive(&desired));
