@@ -258,6 +258,52 @@ fn bench_times_the_banks() {
             .iter()
             .any(|f| f["what"] == "dihc" && f["channels"] == 8)
     );
+    assert!(figures.iter().all(|f| f["vector_path"] != "best"));
+    assert_eq!(report["clock"], "wall");
     assert_fails(&["bench", "--channels", "0"], &["--channels 0"]);
     assert_fails(&["bench", "--channels", "70000"], &["--channels 70000"]);
+    assert_fails(
+        &["bench", "--vector-path", "all"],
+        &["--vector-path", "--channels"],
+    );
+}
+
+#[test]
+fn bench_times_each_vector_path_on_the_thread_cpu_clock() {
+    let args = [
+        "--json",
+        "bench",
+        "--channels",
+        "8",
+        "--samples",
+        "400",
+        "--repeats",
+        "1",
+        "--clock",
+        "thread-cpu",
+        "--vector-path",
+        "all",
+    ];
+    let output = hystcomp(&args);
+    if !cfg!(target_os = "linux") {
+        assert!(!output.status.success());
+        assert!(stderr(&output).contains("--clock thread-cpu"));
+        hystcomp_testkit::skip("--clock thread-cpu is Linux only: checked that it is refused");
+        return;
+    }
+    assert!(output.status.success(), "{}", stderr(&output));
+    let report: serde_json::Value = serde_json::from_str(&stdout(&output)).unwrap();
+    assert_eq!(report["clock"], "thread-cpu");
+    let figures = report["figures"].as_array().unwrap();
+    let paths: Vec<&str> = ["baseline", "avx2", "avx512"]
+        .into_iter()
+        .filter(|p| figures.iter().any(|f| f["vector_path"] == *p))
+        .collect();
+    // The baseline always; each figure once per path, seven methods, two precisions.
+    assert!(paths.contains(&"baseline"), "{paths:?}");
+    assert_eq!(figures.len(), 14 * paths.len());
+    for f in figures {
+        let ns = f["median_ns_per_channel_step"].as_f64().unwrap();
+        assert!(ns.is_finite() && ns > 0.0, "{f}");
+    }
 }

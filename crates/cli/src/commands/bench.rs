@@ -6,7 +6,6 @@
 
 use std::hint::black_box;
 use std::path::PathBuf;
-use std::time::Instant;
 
 use hystcomp_core::{
     ChainCompensator, Compensator, CreepInverse, Dihc, Ihc, Mpim, OutputLimits, Real, SolveMode,
@@ -17,6 +16,7 @@ use hystcomp_io::compensator::{Method, ScaledCompensator};
 use hystcomp_io::model_file::{Direction, ModelFile};
 use serde::Serialize;
 
+use super::clock::Clock;
 use crate::files::{Files, NamesFiles};
 use crate::{CliError, Context};
 
@@ -37,6 +37,15 @@ pub struct Args {
     /// to 65536, e.g. 1,8,64,1024,4096): cost per channel-step of every method, f64 and f32.
     #[arg(long, value_name = "C,...", value_delimiter = ',')]
     channels: Option<Vec<usize>>,
+    /// What the figures are measured in: `wall` time, or `thread-cpu`, the CPU time of the
+    /// timing thread alone (Linux), steadier on a machine shared with other work.
+    #[arg(long, value_enum, default_value_t = Clock::Wall)]
+    clock: Clock,
+    /// With `--channels`: the compilation of the bank kernels to time (`best`, the widest the
+    /// processor has, as the banks take by default; `all`, each the processor has, one after
+    /// the other).
+    #[arg(long, value_enum, default_value_t = super::bench_bank::PathChoice::Best)]
+    vector_path: super::bench_bank::PathChoice,
 }
 
 impl NamesFiles for Args {
@@ -82,17 +91,23 @@ struct Figure {
 struct Report {
     samples: usize,
     repeats: usize,
+    clock: Clock,
     figures: Vec<Figure>,
 }
 
-/// Median and minimum of `repeats` timed runs of `run`, in ns per sample.
-pub(super) fn time(samples: usize, repeats: usize, mut run: impl FnMut()) -> (f64, f64) {
+/// Median and minimum of `repeats` timed runs of `run` on `clock`, in ns per sample.
+pub(super) fn time(
+    clock: Clock,
+    samples: usize,
+    repeats: usize,
+    mut run: impl FnMut(),
+) -> (f64, f64) {
     run(); // warm up caches and branch predictors
     let mut per_sample: Vec<f64> = (0..repeats)
         .map(|_| {
-            let start = Instant::now();
+            let start = clock.start();
             run();
-            start.elapsed().as_secs_f64() * 1e9 / samples as f64
+            start.seconds() * 1e9 / samples as f64
         })
         .collect();
     per_sample.sort_by(f64::total_cmp);
@@ -128,6 +143,7 @@ fn trajectory<T: Real>(plant: &Mpim<T, Vec<T>>, samples: usize) -> (Vec<T>, Vec<
 struct Bench {
     samples: usize,
     repeats: usize,
+    clock: Clock,
     figures: Vec<Figure>,
 }
 
@@ -140,7 +156,7 @@ impl Bench {
         precision: &'static str,
         run: impl FnMut(),
     ) {
-        let (median, min) = time(self.samples, self.repeats, run);
+        let (median, min) = time(self.clock, self.samples, self.repeats, run);
         self.figures.push(Figure {
             what,
             model: model.to_string(),
@@ -326,13 +342,26 @@ pub fn run(args: &Args, ctx: Context) -> Result<(), CliError> {
         1..=MAX_REPEATS,
         "timed runs (the default is 15)",
     )?;
+    args.clock.check()?;
     if let Some(channels) = &args.channels {
-        return super::bench_bank::run(channels, args.samples, args.repeats, ctx);
+        let options = super::bench_bank::Options {
+            samples: args.samples,
+            repeats: args.repeats,
+            clock: args.clock,
+            path: args.vector_path,
+        };
+        return super::bench_bank::run(channels, options, ctx);
+    }
+    if args.vector_path != super::bench_bank::PathChoice::Best {
+        return Err(CliError::input(
+            "--vector-path times the compensator banks: give --channels too",
+        ));
     }
     let user_model = args.model.as_deref().map(ModelFile::load).transpose()?;
     let mut bench = Bench {
         samples: args.samples,
         repeats: args.repeats,
+        clock: args.clock,
         figures: Vec::new(),
     };
     for n in [10, 100] {
@@ -367,6 +396,7 @@ pub fn run(args: &Args, ctx: Context) -> Result<(), CliError> {
     let report = Report {
         samples: args.samples,
         repeats: args.repeats,
+        clock: args.clock,
         figures: bench.figures,
     };
     if ctx.json {
@@ -374,7 +404,8 @@ pub fn run(args: &Args, ctx: Context) -> Result<(), CliError> {
         return Ok(());
     }
     outln!(
-        "per-sample cost, ns (median of {} runs of {} samples; fastest in brackets)",
+        "per-sample cost, ns of {} time (median of {} runs of {} samples; fastest in brackets)",
+        report.clock.name(),
         report.repeats,
         report.samples
     )?;

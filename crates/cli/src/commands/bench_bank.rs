@@ -4,18 +4,23 @@
 //! trajectory, stepped tick after tick.
 //!
 //! Each figure is the median over repeated runs of a whole signal, divided by its ticks times
-//! its channels. The criterion benches (`cargo bench -p hystcomp-core --bench bank`) measure
-//! the same with statistics.
+//! its channels, on the wall clock or (`--clock thread-cpu`) the timing thread's CPU time, for
+//! the compilation of the kernels the banks take (`--vector-path best`) or each the processor
+//! has (`--vector-path all`). The criterion benches (`cargo bench -p hystcomp-core --bench
+//! bank`) measure the same with statistics.
 
 use std::hint::black_box;
 
 use hystcomp_core::{
-    CompensatorBank, DihcBank, Heap, IhcBank, Mpim, OutputLimits, Real, SolveMode, WihcBank,
+    CompensatorBank, DihcBank, Heap, IhcBank, Mpim, OutputLimits, Real, SolveMode, VectorPath,
+    WihcBank,
     paper::{self, PublishedMpim},
+    with_vector_path,
 };
 use serde::Serialize;
 
 use super::bench::time;
+use super::clock::Clock;
 use crate::{CliError, Context};
 
 /// Most channels per bank (`--channels`), as many as a model set may hold.
@@ -24,11 +29,76 @@ pub const MAX_BENCH_CHANNELS: usize = hystcomp_io::bank::MAX_CHANNELS;
 /// Operators of every channel.
 const OPERATORS: usize = 10;
 
+/// The compilations of the bank kernels `--vector-path` times
+/// ([`hystcomp_core::VectorPath`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum PathChoice {
+    /// The widest the processor has: what the banks take by default.
+    Best,
+    /// Each the processor has, one after the other (baseline, AVX2, AVX-512).
+    All,
+    /// The target's baseline (SSE2 on x86-64).
+    Baseline,
+    /// AVX2.
+    Avx2,
+    /// AVX-512 (F, VL, BW, DQ).
+    Avx512,
+}
+
+impl PathChoice {
+    /// The paths to time; refuses one the processor lacks.
+    fn paths(self) -> Result<Vec<VectorPath>, CliError> {
+        let one = |path: VectorPath, name: &str| {
+            if path.available() {
+                Ok(vec![path])
+            } else {
+                Err(CliError::input(format!(
+                    "--vector-path {name}: this processor cannot run it \
+                     (--vector-path all times each it can)"
+                )))
+            }
+        };
+        match self {
+            PathChoice::Best => Ok(vec![VectorPath::current()]),
+            PathChoice::All => Ok([VectorPath::Baseline, VectorPath::Avx2, VectorPath::Avx512]
+                .into_iter()
+                .filter(|p| p.available())
+                .collect()),
+            PathChoice::Baseline => one(VectorPath::Baseline, "baseline"),
+            PathChoice::Avx2 => one(VectorPath::Avx2, "avx2"),
+            PathChoice::Avx512 => one(VectorPath::Avx512, "avx512"),
+        }
+    }
+}
+
+/// The name of a path in the report.
+fn path_name(path: VectorPath) -> &'static str {
+    match path {
+        VectorPath::Best => "best",
+        VectorPath::Baseline => "baseline",
+        VectorPath::Avx2 => "avx2",
+        VectorPath::Avx512 => "avx512",
+    }
+}
+
+/// How `hystcomp bench --channels` times.
+#[derive(Debug, Clone, Copy)]
+pub struct Options {
+    /// About this many channel-steps per timed run (at least 50 ticks).
+    pub samples: usize,
+    /// Timed runs per figure (the median is reported).
+    pub repeats: usize,
+    pub clock: Clock,
+    pub path: PathChoice,
+}
+
 /// One measured figure.
 #[derive(Debug, Clone, Serialize)]
 struct Figure {
     /// `ihc`, `ihc-delayed`, `ihc-guarded`, `wihc`, `wihc-delayed`, `wihc-guarded` or `dihc`.
     what: &'static str,
+    /// The compilation of the kernels: `baseline`, `avx2` or `avx512`.
+    vector_path: &'static str,
     channels: usize,
     operators: usize,
     /// `f64` or `f32`.
@@ -44,6 +114,7 @@ struct Figure {
 #[derive(Debug, Serialize)]
 struct Report {
     repeats: usize,
+    clock: Clock,
     figures: Vec<Figure>,
 }
 
@@ -86,16 +157,16 @@ fn signal<T: Real>(plants: &[Mpim<T, Vec<T>>], ticks: usize) -> Vec<T> {
     out
 }
 
-/// Times every bank kind for `channels` channels in `T`.
+/// Times every bank kind for `channels` channels in `T`, on each of `paths`.
 fn bank<T: Real>(
     figures: &mut Vec<Figure>,
     channels: usize,
-    samples: usize,
-    repeats: usize,
+    options: Options,
+    paths: &[VectorPath],
     precision: &'static str,
 ) -> Result<(), CliError> {
     // At least 50 ticks, and about `samples` channel-steps per run.
-    let ticks = (samples / channels).max(50);
+    let ticks = (options.samples / channels).max(50);
     let plants = (0..channels)
         .map(|c| channel_model::<T>(&paper::TABLE1, c))
         .collect::<Result<Vec<_>, _>>()?;
@@ -148,31 +219,31 @@ fn bank<T: Real>(
         ),
     ];
     for (what, mut b) in banks {
-        let (median, min) = time(ticks * channels, repeats, || {
-            b.reset();
-            b.process(black_box(&desired), &mut control)
-                .expect("a whole number of ticks");
-        });
-        figures.push(Figure {
-            what,
-            channels,
-            operators: OPERATORS,
-            precision,
-            ticks,
-            median_ns_per_channel_step: median,
-            min_ns_per_channel_step: min,
-        });
+        for &path in paths {
+            let (median, min) = with_vector_path(path, || {
+                time(options.clock, ticks * channels, options.repeats, || {
+                    b.reset();
+                    b.process(black_box(&desired), &mut control)
+                        .expect("a whole number of ticks");
+                })
+            });
+            figures.push(Figure {
+                what,
+                vector_path: path_name(path),
+                channels,
+                operators: OPERATORS,
+                precision,
+                ticks,
+                median_ns_per_channel_step: median,
+                min_ns_per_channel_step: min,
+            });
+        }
     }
     Ok(())
 }
 
 /// Runs `hystcomp bench --channels ...`: every bank kind for every channel count, f64 and f32.
-pub fn run(
-    channels: &[usize],
-    samples: usize,
-    repeats: usize,
-    ctx: Context,
-) -> Result<(), CliError> {
+pub fn run(channels: &[usize], options: Options, ctx: Context) -> Result<(), CliError> {
     for &c in channels {
         crate::bounds::count(
             "--channels",
@@ -181,33 +252,53 @@ pub fn run(
             "channels per bank (e.g. --channels 1,8,64,1024,4096)",
         )?;
     }
+    let paths = options.path.paths()?;
     let mut figures = Vec::new();
     for &c in channels {
-        bank::<f64>(&mut figures, c, samples, repeats, "f64")?;
-        bank::<f32>(&mut figures, c, samples, repeats, "f32")?;
+        bank::<f64>(&mut figures, c, options, &paths, "f64")?;
+        bank::<f32>(&mut figures, c, options, &paths, "f32")?;
     }
-    let report = Report { repeats, figures };
+    let repeats = options.repeats;
+    let report = Report {
+        repeats,
+        clock: options.clock,
+        figures,
+    };
     if ctx.json {
         crate::print_json(&report)?;
         return Ok(());
     }
     outln!(
-        "bank cost per channel-step, ns ({OPERATORS} operators, each channel its own model; \
-         median of {repeats} runs, fastest in brackets)"
+        "bank cost per channel-step, ns of {} time ({OPERATORS} operators, each channel its own \
+         model; median of {repeats} runs, fastest in brackets)",
+        options.clock.name()
     )?;
-    outln!("{:<14} {:>9} {:>22} {:>22}", "", "channels", "f64", "f32")?;
-    let mut rows: Vec<(&str, usize)> = Vec::new();
+    outln!(
+        "{:<14} {:>9} {:>9} {:>22} {:>22}",
+        "",
+        "path",
+        "channels",
+        "f64",
+        "f32"
+    )?;
+    let mut rows: Vec<(&str, &str, usize)> = Vec::new();
     for f in &report.figures {
-        if !rows.contains(&(f.what, f.channels)) {
-            rows.push((f.what, f.channels));
+        let key = (f.what, f.vector_path, f.channels);
+        if !rows.contains(&key) {
+            rows.push(key);
         }
     }
-    for (what, c) in rows {
+    for (what, path, c) in rows {
         let cell = |precision: &str| {
             report
                 .figures
                 .iter()
-                .find(|f| f.what == what && f.channels == c && f.precision == precision)
+                .find(|f| {
+                    f.what == what
+                        && f.vector_path == path
+                        && f.channels == c
+                        && f.precision == precision
+                })
                 .map(|f| {
                     format!(
                         "{:.2} ({:.2})",
@@ -217,8 +308,9 @@ pub fn run(
                 .unwrap_or_else(|| "-".into())
         };
         outln!(
-            "{:<14} {:>9} {:>22} {:>22}",
+            "{:<14} {:>9} {:>9} {:>22} {:>22}",
             what,
+            path,
             c,
             cell("f64"),
             cell("f32")

@@ -3,6 +3,7 @@
 pub mod bench;
 pub mod bench_bank;
 pub mod chain_args;
+pub mod clock;
 pub mod compensate;
 pub mod crossval;
 pub mod evaluate;
