@@ -292,6 +292,7 @@ fn identify_compensate_and_crossval_take_the_full_model() {
         "{}",
         stderr(&out)
     );
+    band_limited_inversion(dir.path(), &plant, &fast, &stage);
 
     // bench: the model file's own chain timed beside its hysteresis compensators.
     let out = hystcomp(&[
@@ -394,6 +395,135 @@ fn identify_compensate_and_crossval_take_the_full_model() {
             s(&dir.path().join("x.json")),
         ],
         &["sample rate", "--time-column"],
+    );
+}
+
+/// The drive column (second) of a drive file.
+fn drive_column(path: &Path) -> Vec<f64> {
+    std::fs::read_to_string(path)
+        .unwrap()
+        .lines()
+        .skip(1)
+        .map(|l| l.split(',').nth(1).unwrap().parse().unwrap())
+        .collect()
+}
+
+/// The largest step between neighbouring samples.
+fn peak_step(x: &[f64]) -> f64 {
+    x.windows(2)
+        .map(|w| (w[1] - w[0]).abs())
+        .fold(0.0, f64::max)
+}
+
+/// `compensate --inverse-band-hz`: the drive is the library's band-limited offline inversion
+/// (`ScaledCompensator::with_inverse_band`), asks less slew than the whole inverse, and bad
+/// bands or a model without a vibration link are refused with the option named.
+fn band_limited_inversion(dir: &Path, plant: &Path, fast: &Path, stage: &Path) {
+    use hystcomp_io::compensator::{Method, ScaledCompensator};
+    let run = |band: Option<&str>, out: &Path| {
+        let mut args = vec![
+            "--json",
+            "compensate",
+            "--model",
+            s(plant),
+            "--method",
+            "ihc",
+            "--desired",
+            s(fast),
+            "--stage",
+            s(stage),
+            "--limits",
+            "0:10",
+            "--allow-saturation",
+            "-o",
+            s(out),
+        ];
+        if let Some(band) = band {
+            args.extend(["--inverse-band-hz", band]);
+        }
+        let out = hystcomp(&args);
+        assert!(out.status.success(), "{}", stderr(&out));
+        serde_json::from_slice::<serde_json::Value>(&out.stdout).unwrap()
+    };
+    let whole_path = dir.join("whole.csv");
+    let banded_path = dir.join("banded.csv");
+    let whole_report = run(None, &whole_path);
+    let report = run(Some("60"), &banded_path);
+    assert!(whole_report["inverse_band_hz"].is_null(), "{whole_report}");
+    assert_eq!(report["inverse_band_hz"].as_f64(), Some(60.0), "{report}");
+    let (whole, banded) = (drive_column(&whole_path), drive_column(&banded_path));
+    // The library's offline inversion of the same trajectory with the same band.
+    let model = ModelFile::load(plant).unwrap();
+    let desired: Vec<f64> = std::fs::read_to_string(fast)
+        .unwrap()
+        .lines()
+        .skip(1)
+        .map(|l| l.split(',').nth(1).unwrap().parse().unwrap())
+        .collect();
+    let mut reference = ScaledCompensator::new(&model, Method::Ihc, Some((0.0, 10.0)))
+        .unwrap()
+        .with_inverse_band(Some(60.0))
+        .unwrap();
+    let mut expected = vec![0.0; desired.len()];
+    reference.process(&desired, &mut expected).unwrap();
+    assert_eq!(banded.len(), expected.len());
+    for (k, (a, b)) in banded.iter().zip(&expected).enumerate() {
+        assert!(
+            (a - b).abs() <= 1e-9 * (1.0 + b.abs()),
+            "sample {k}: {a} vs {b}"
+        );
+    }
+    // Band-limited, the drive asks less of the amplifier than the whole inverse (after the
+    // start from rest, a jump to the trajectory's first position either way).
+    let (b, w) = (peak_step(&banded[50..]), peak_step(&whole[50..]));
+    assert!(b < 0.8 * w, "{b} vs {w}");
+    let slew = |r: &serde_json::Value| r["feasibility"]["slew_limited"].as_u64().unwrap();
+    assert!(slew(&report) <= slew(&whole_report), "{report}");
+    // The drive file's desired column is the trajectory as given, not the low-passed one.
+    let written: Vec<f64> = std::fs::read_to_string(&banded_path)
+        .unwrap()
+        .lines()
+        .skip(1)
+        .map(|l| l.split(',').nth(2).unwrap().parse().unwrap())
+        .collect();
+    assert_eq!(written, desired);
+    // Bad bands: at or beyond the model's Nyquist frequency (1 kHz), zero, not a number.
+    for bad in ["1000", "0", "1e9", "NaN"] {
+        assert_fails(
+            &[
+                "compensate",
+                "--model",
+                s(plant),
+                "--method",
+                "ihc",
+                "--desired",
+                s(fast),
+                "--inverse-band-hz",
+                bad,
+                "-o",
+                s(&dir.join("bad.csv")),
+            ],
+            &["--inverse-band-hz", "Nyquist"],
+        );
+    }
+    assert!(!dir.join("bad.csv").exists());
+    // Without a vibration link there is nothing to band-limit.
+    let table1 = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../models/table1-plant.json");
+    assert_fails(
+        &[
+            "compensate",
+            "--model",
+            s(&table1),
+            "--method",
+            "ihc",
+            "--desired",
+            s(fast),
+            "--inverse-band-hz",
+            "200",
+            "-o",
+            s(&dir.join("none.csv")),
+        ],
+        &["--inverse-band-hz", "no vibration link"],
     );
 }
 

@@ -22,6 +22,7 @@ pub mod learning_study;
 pub mod reference;
 pub mod report;
 pub mod signals;
+pub mod slew_drive;
 pub mod speed;
 pub mod study;
 pub mod study_report;

@@ -5,20 +5,25 @@
 //!   the amplitude is reduced about the trajectory's mid-range: the `full` pipeline's drive
 //!   for the full amplitude is checked against the amplifier (`hystcomp_stage::feasibility`)
 //!   and, while any sample of the evaluated period reaches the slew or rail limit, the
-//!   amplitude is scaled by 0.9 x the ratio of the slew limit to the peak slew that period
+//!   amplitude is scaled by [`SLEW_MARGIN`] (0.9) x the ratio of the slew limit to the peak slew that period
 //!   asks (at most [`MAX_REDUCTIONS`] times); every approach then tracks the same reduced
 //!   trajectory. (The start from rest may be slew-limited; it is not evaluated.)
 //! - **A triangle raster** of [`RASTER_UM`] (20 um peak to peak about the trajectory's
 //!   mid-range) with corners rounded over [`RASTER_ROUNDING`] (5 %) of its period, at each of
 //!   [`RASTER_RATES_HZ`] (10 to 200 Hz), on the built-in amplifier and on a stronger one
 //!   ([`STRONG_PEAK_CURRENT_MA`]: ten times the slew rate), to tell the amplifier's slew limit
-//!   from the compensation.
+//!   from the compensation. Where the faithful drive of a chain with a vibration link asks
+//!   more than the amplifier's slew rate (the built-in amplifier from 100 Hz), the raster is
+//!   driven instead by the slew-constrained drive of [`crate::slew_drive`], every step within
+//!   [`SLEW_MARGIN`] of the amplifier's slew rate ([`SpeedRun::slew_constrained`] says so);
+//!   where the faithful drive is within it, nothing changes.
 //!
 //! Each run starts from rest: a raised cosine of 1 s to the first desired position, 1 s there,
 //! then two periods of the trajectory (indices on the last) or [`RASTER_PERIODS`] periods of
 //! the raster (indices on the last five). The models are the study's, identified once from
 //! its excitation.
 
+use hystcomp_io::compensator::Method;
 use hystcomp_stage::{StageConfig, feasibility};
 use rayon::prelude::*;
 use serde::Serialize;
@@ -41,6 +46,10 @@ pub const RASTER_PERIODS: usize = 10;
 pub const STRONG_PEAK_CURRENT_MA: f64 = 1000.0;
 /// The most amplitude reductions at one rate.
 pub const MAX_REDUCTIONS: usize = 6;
+/// The share of the amplifier's slew rate a drive may use: the paper trajectory's amplitude
+/// is reduced to, and the raster's slew-constrained drive kept within, this share (a margin
+/// for the amplifier's own first-order lag, which a drive at the full slew rate runs into).
+pub const SLEW_MARGIN: f64 = 0.9;
 
 /// One approach at one rate.
 #[derive(Debug, Clone, Serialize)]
@@ -51,6 +60,9 @@ pub struct SpeedRun {
     pub indices: TrackingIndices,
     /// Share of the evaluated samples at the amplifier's slew or rail limit.
     pub limited_share: f64,
+    /// Whether the drive is the slew-constrained one ([`crate::slew_drive`]) because the
+    /// faithful inverse asked more than the amplifier's slew rate.
+    pub slew_constrained: bool,
 }
 
 /// Every approach at one rate.
@@ -122,6 +134,42 @@ fn window_limited_share(
     Ok((whole - before) as f64 / (command.len() - from).max(1) as f64)
 }
 
+/// The largest drive step per sample `stage`'s amplifier follows within [`SLEW_MARGIN`] of its
+/// slew rate, in command volts.
+pub fn max_drive_step_v(stage: &StageConfig) -> f64 {
+    SLEW_MARGIN * stage.amplifier.slew_rate_v_per_s() / stage.amplifier.gain / stage.sample_rate_hz
+}
+
+/// Each approach's drive for `desired`: the faithful one, or with `slew_limited` the
+/// slew-constrained one where a chain with a vibration link asks more than the amplifier's
+/// slew rate (see [`crate::slew_drive`]); whether it was constrained.
+fn drive_for(
+    stage: &StageConfig,
+    approach: &Approach<'_>,
+    full_scale: f64,
+    band_hz: Option<f64>,
+    desired: &[f64],
+    slew_limited: bool,
+) -> Result<(Vec<f64>, bool), StudyError> {
+    if let (true, None, Some((model, method))) = (slew_limited, band_hz, approach.model)
+        && model.vibration.is_some()
+        && matches!(method, Method::Ihc | Method::Wihc)
+    {
+        let drive = crate::slew_drive::slew_constrained_drive(
+            model,
+            method,
+            (0.0, full_scale),
+            desired,
+            max_drive_step_v(stage),
+        )
+        .map_err(|e| StudyError::Option(format!("{}: {e}", approach.label)))?;
+        return Ok((drive.drive, drive.constrained));
+    }
+    let (command, _) = approach.command_in_band(desired, full_scale, band_hz)?;
+    Ok((command, false))
+}
+
+#[allow(clippy::too_many_arguments)]
 fn runs(
     stage: &StageConfig,
     seed: u64,
@@ -130,17 +178,20 @@ fn runs(
     band_hz: Option<f64>,
     desired: &[f64],
     from: usize,
+    slew_limited: bool,
 ) -> Result<Vec<SpeedRun>, StudyError> {
     approaches
         .par_iter()
         .map(|approach| {
-            let (command, _) = approach.command_in_band(desired, full_scale, band_hz)?;
+            let (command, slew_constrained) =
+                drive_for(stage, approach, full_scale, band_hz, desired, slew_limited)?;
             let limited_share = window_limited_share(stage, &command, from)?;
             let measured = track(stage, seed, &command)?;
             Ok(SpeedRun {
                 label: approach.label.clone(),
                 indices: indices(desired, &measured, from, &approach.label)?,
                 limited_share,
+                slew_constrained,
             })
         })
         .collect()
@@ -194,13 +245,15 @@ pub(crate) fn run_speed(
                     break;
                 }
                 let limit = stage.amplifier.slew_rate_v_per_s();
-                scale *= (0.9 * limit / peak).min(0.9);
+                scale *= (SLEW_MARGIN * limit / peak).min(SLEW_MARGIN);
             }
             let (desired, _, from) = make(scale)?;
             Ok(SpeedPoint {
                 rate_hz: rate,
                 amplitude_scale: scale,
-                runs: runs(stage, seed, approaches, full_scale, band_hz, &desired, from)?,
+                runs: runs(
+                    stage, seed, approaches, full_scale, band_hz, &desired, from, false,
+                )?,
             })
         })
         .collect::<Result<_, _>>()?;
@@ -226,7 +279,7 @@ pub(crate) fn run_speed(
                     rate_hz: rate,
                     amplitude_scale: 1.0,
                     runs: runs(
-                        config, seed, approaches, full_scale, band_hz, &desired, from,
+                        config, seed, approaches, full_scale, band_hz, &desired, from, true,
                     )?,
                 })
             })

@@ -65,6 +65,13 @@ pub struct Args {
     /// vibration inverse needs for a negligible cut (the file is a whole known trajectory).
     #[arg(long, value_name = "SAMPLES")]
     preview: Option<usize>,
+    /// With a vibration link: invert the trajectory low-passed with zero phase at this
+    /// frequency, Hz (band-limited inversion: a second-order Butterworth run forward and
+    /// backward, -6 dB here). Meant as the top of the band the link was identified on, above
+    /// which its inverse extrapolates and can ask more slew than the amplifier has. The drive
+    /// file's desired column stays the trajectory as given. Default: inverted whole.
+    #[arg(long, value_name = "HZ")]
+    inverse_band_hz: Option<f64>,
     /// Exit with status 0 even when the drive was clamped to its limits: because the trajectory
     /// left the reachable range, or because a delayed loop lagged or rang (the samples are
     /// counted either way, and the drive file is written).
@@ -147,6 +154,8 @@ struct Report {
     control_range: (f64, f64),
     /// With a vibration link: the preview of its inverse, samples (0 without).
     preview: usize,
+    /// With `--inverse-band-hz`: the band the vibration inverse was limited to, Hz.
+    inverse_band_hz: Option<f64>,
     /// What the drive asks of the stage's amplifier (`--stage`, or the built-in stage's).
     feasibility: hystcomp_stage::Feasibility,
 }
@@ -178,6 +187,18 @@ pub fn run(args: &Args, ctx: Context) -> Result<(), CliError> {
         args.unstable_delay(),
     )
     .map_err(|e| build_error(e, args.method).context(args.model.display()))?;
+    if let Some(band) = args.inverse_band_hz {
+        if model.vibration.is_none() {
+            return Err(CliError::input(format!(
+                "--inverse-band-hz {band}: the model has no vibration link, so there is no \
+                 vibration inverse to band-limit ({})",
+                args.model.display()
+            )));
+        }
+        compensator = compensator
+            .with_inverse_band(Some(band))
+            .map_err(|e| CliError::input(format!("--inverse-band-hz: {e}")))?;
+    }
     let stage = args.stage()?;
     let columns = data::read_columns(
         &args.trajectory,
@@ -217,8 +238,11 @@ pub fn run(args: &Args, ctx: Context) -> Result<(), CliError> {
             CliError::input("the trajectory has no samples").context(args.trajectory.display())
         );
     }
+    // With --inverse-band-hz the chain inverts the trajectory low-passed (a non-finite sample
+    // leaves it as it is, for the check below to name its row).
+    let inverted = compensator.band_limited(desired);
     for k in 0..n + p {
-        let d = desired[k.min(n - 1)];
+        let d = inverted[k.min(n - 1)];
         let drive = compensator.step(d);
         let Some(at) = k.checked_sub(p) else {
             before = compensator.diagnostics();
@@ -279,6 +303,7 @@ pub fn run(args: &Args, ctx: Context) -> Result<(), CliError> {
         desired_range: compensator.desired_range(),
         control_range: range(&control),
         preview: p,
+        inverse_band_hz: compensator.inverse_band_hz(),
         feasibility: hystcomp_stage::feasibility_held(
             &stage,
             &control,

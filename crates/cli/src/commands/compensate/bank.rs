@@ -108,6 +108,12 @@ pub(super) fn run(args: &Args, ctx: Context) -> Result<(), CliError> {
              of each channel only",
         ));
     }
+    if args.inverse_band_hz.is_some() {
+        return Err(CliError::input(
+            "--inverse-band-hz concerns a model's vibration link, but a bank compensates the \
+             hysteresis of each channel only",
+        ));
+    }
     let limits = args.limits.map(|l| vec![l]);
     let mut bank = ScaledBank::new(&set, args.method, limits.as_deref(), args.unstable_delay())
         .map_err(|e| match e {
