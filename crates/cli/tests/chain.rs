@@ -293,6 +293,7 @@ fn identify_compensate_and_crossval_take_the_full_model() {
         stderr(&out)
     );
     band_limited_inversion(dir.path(), &plant, &fast, &stage);
+    slew_constrained_drive(dir.path(), &plant, &fast, &stage, &config);
 
     // bench: the model file's own chain timed beside its hysteresis compensators.
     let out = hystcomp(&[
@@ -525,6 +526,130 @@ fn band_limited_inversion(dir: &Path, plant: &Path, fast: &Path, stage: &Path) {
         ],
         &["--inverse-band-hz", "no vibration link"],
     );
+}
+
+/// `compensate --within-slew`: every drive step within the share of the amplifier's slew
+/// rate, the model tracking closer than the faithful drive clamped step by step; bad shares,
+/// methods and models refused with the option named.
+fn slew_constrained_drive(
+    dir: &Path,
+    plant: &Path,
+    fast: &Path,
+    stage: &Path,
+    config: &StageConfig,
+) {
+    let base = |out: &Path| {
+        vec![
+            "--json".to_owned(),
+            "compensate".to_owned(),
+            "--model".to_owned(),
+            s(plant).to_owned(),
+            "--method".to_owned(),
+            "ihc".to_owned(),
+            "--desired".to_owned(),
+            s(fast).to_owned(),
+            "--stage".to_owned(),
+            s(stage).to_owned(),
+            "--limits".to_owned(),
+            "0:10".to_owned(),
+            "--allow-saturation".to_owned(),
+            "-o".to_owned(),
+            s(out).to_owned(),
+        ]
+    };
+    let run = |args: Vec<String>| {
+        let out = hystcomp(&args.iter().map(String::as_str).collect::<Vec<_>>());
+        assert!(out.status.success(), "{}", stderr(&out));
+        serde_json::from_slice::<serde_json::Value>(&out.stdout).unwrap()
+    };
+    let whole_path = dir.join("faithful.csv");
+    let slewed_path = dir.join("slewed.csv");
+    let whole_report = run(base(&whole_path));
+    assert!(whole_report["slew_constrained"].is_null(), "{whole_report}");
+    let mut args = base(&slewed_path);
+    args.extend(["--within-slew".to_owned(), "0.9".to_owned()]);
+    let report = run(args);
+    assert_eq!(report["slew_constrained"].as_bool(), Some(true), "{report}");
+    let (faithful, slewed) = (drive_column(&whole_path), drive_column(&slewed_path));
+    let max_step = 0.9 * config.amplifier.slew_rate_v_per_s() / config.amplifier.gain / RATE;
+    assert!(peak_step(&faithful) > max_step);
+    for (k, w) in slewed.windows(2).enumerate() {
+        assert!(
+            (w[1] - w[0]).abs() <= max_step * (1.0 + 1e-9),
+            "sample {k}: {} > {max_step}",
+            w[1] - w[0]
+        );
+    }
+    assert!(slewed.iter().all(|v| (0.0..=10.0).contains(v)));
+    let slew = |r: &serde_json::Value| r["feasibility"]["slew_limited"].as_u64().unwrap();
+    assert!(slew(&report) < slew(&whole_report), "{report}");
+    // Closer, through the model, than the faithful drive clamped step by step.
+    let model = ModelFile::load(plant).unwrap();
+    let desired: Vec<f64> = std::fs::read_to_string(fast)
+        .unwrap()
+        .lines()
+        .skip(1)
+        .map(|l| l.split(',').nth(1).unwrap().parse().unwrap())
+        .collect();
+    let mut clamped = faithful.clone();
+    for k in 1..clamped.len() {
+        clamped[k] = clamped[k - 1] + (faithful[k] - clamped[k - 1]).clamp(-max_step, max_step);
+    }
+    let rms = |drive: &[f64]| {
+        let y = model.predict(drive).unwrap();
+        (y.iter()
+            .zip(&desired)
+            .map(|(a, b)| (a - b).powi(2))
+            .sum::<f64>()
+            / y.len() as f64)
+            .sqrt()
+    };
+    assert!(
+        rms(&slewed) < rms(&clamped),
+        "{} vs {}",
+        rms(&slewed),
+        rms(&clamped)
+    );
+    // Refused: shares out of (0, 1], a loop method, a model without a vibration link, with
+    // --preview.
+    let table1 = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../models/table1-plant.json");
+    let refused = dir.join("refused.csv");
+    for (extra, model, fragment) in [
+        (vec!["--within-slew", "0"], plant, "between 0"),
+        (vec!["--within-slew", "1.5"], plant, "between 0"),
+        (vec!["--within-slew", "NaN"], plant, "between 0"),
+        (
+            vec!["--within-slew", "0.9", "--method", "ihc-guarded"],
+            plant,
+            "ihc or wihc",
+        ),
+        (
+            vec!["--within-slew", "0.9"],
+            table1.as_path(),
+            "no vibration link",
+        ),
+        (
+            vec!["--within-slew", "0.9", "--preview", "40"],
+            plant,
+            "drop --preview",
+        ),
+    ] {
+        let mut args = vec![
+            "compensate",
+            "--model",
+            s(model),
+            "--desired",
+            s(fast),
+            "-o",
+            s(&refused),
+        ];
+        if !extra.contains(&"--method") {
+            args.extend(["--method", "ihc"]);
+        }
+        args.extend(extra);
+        assert_fails(&args, &["--within-slew", fragment]);
+    }
+    assert!(!refused.exists());
 }
 
 #[test]

@@ -72,6 +72,13 @@ pub struct Args {
     /// file's desired column stays the trajectory as given. Default: inverted whole.
     #[arg(long, value_name = "HZ")]
     inverse_band_hz: Option<f64>,
+    /// With a chain model with a vibration link and --method ihc or wihc: keep every step of
+    /// the drive within this share (0 to 1) of the amplifier's slew rate (--stage, or the
+    /// built-in stage's), the drive chosen so that the model tracks the trajectory as closely
+    /// as it can in the least-squares sense (a quadratic programme through the vibration link;
+    /// see the README). Where the whole inverse is already within it, the drive is unchanged.
+    #[arg(long, value_name = "SHARE")]
+    within_slew: Option<f64>,
     /// Exit with status 0 even when the drive was clamped to its limits: because the trajectory
     /// left the reachable range, or because a delayed loop lagged or rang (the samples are
     /// counted either way, and the drive file is written).
@@ -156,6 +163,9 @@ struct Report {
     preview: usize,
     /// With `--inverse-band-hz`: the band the vibration inverse was limited to, Hz.
     inverse_band_hz: Option<f64>,
+    /// With `--within-slew`: whether the drive had to be slew-constrained (false: the whole
+    /// inverse was already within the share of the slew rate).
+    slew_constrained: Option<bool>,
     /// What the drive asks of the stage's amplifier (`--stage`, or the built-in stage's).
     feasibility: hystcomp_stage::Feasibility,
 }
@@ -198,6 +208,9 @@ pub fn run(args: &Args, ctx: Context) -> Result<(), CliError> {
         compensator = compensator
             .with_inverse_band(Some(band))
             .map_err(|e| CliError::input(format!("--inverse-band-hz: {e}")))?;
+    }
+    if let Some(share) = args.within_slew {
+        check_within_slew(share, args, &model)?;
     }
     let stage = args.stage()?;
     let columns = data::read_columns(
@@ -271,6 +284,22 @@ pub fn run(args: &Args, ctx: Context) -> Result<(), CliError> {
         before = after;
     }
 
+    let mut slew_constrained = None;
+    if let Some(share) = args.within_slew {
+        let max_step_v = share * stage.amplifier.slew_rate_v_per_s() / stage.amplifier.gain
+            * drive_period_s(time, &stage);
+        let drive = hystcomp_experiments::slew_drive::slew_constrained_drive(
+            &model,
+            args.method,
+            compensator.limits(),
+            desired,
+            max_step_v,
+        )
+        .map_err(|e| CliError::input(format!("--within-slew {share}: {e}")))?;
+        control = drive.drive;
+        slew_constrained = Some(drive.constrained);
+    }
+
     let time_name = columns.names[0].clone();
     let desired_name = format!("desired_{}", compensator.desired_unit());
     let control_name = format!("drive_{}", compensator.control_unit().to_lowercase());
@@ -304,6 +333,7 @@ pub fn run(args: &Args, ctx: Context) -> Result<(), CliError> {
         control_range: range(&control),
         preview: p,
         inverse_band_hz: compensator.inverse_band_hz(),
+        slew_constrained,
         feasibility: hystcomp_stage::feasibility_held(
             &stage,
             &control,
@@ -385,6 +415,33 @@ impl Args {
             rows: None,
         }
     }
+}
+
+/// `--within-slew SHARE` needs a share in (0, 1], an exact IHC or WIHC, a model with a
+/// vibration link, and the whole trajectory inverted offline as given.
+fn check_within_slew(share: f64, args: &Args, model: &ModelFile) -> Result<(), CliError> {
+    let refuse = |why: &str| Err(CliError::input(format!("--within-slew {share}: {why}")));
+    if !(share > 0.0 && share <= 1.0) {
+        return refuse("give a share of the amplifier's slew rate between 0 (excluded) and 1");
+    }
+    if !matches!(args.method, Method::Ihc | Method::Wihc) {
+        return refuse(
+            "the slew-constrained drive inverts the hysteresis with --method ihc or wihc",
+        );
+    }
+    if model.vibration.is_none() {
+        return refuse(&format!(
+            "the model has no vibration link ({}); the slew-constrained drive works through it",
+            args.model.display()
+        ));
+    }
+    if args.preview.is_some() || args.inverse_band_hz.is_some() {
+        return refuse(
+            "the slew-constrained drive inverts the whole trajectory offline: drop --preview \
+             and --inverse-band-hz",
+        );
+    }
+    Ok(())
 }
 
 /// The earlier of two optional times.

@@ -108,10 +108,10 @@ pub(super) fn run(args: &Args, ctx: Context) -> Result<(), CliError> {
              of each channel only",
         ));
     }
-    if args.inverse_band_hz.is_some() {
+    if args.inverse_band_hz.is_some() || args.within_slew.is_some() {
         return Err(CliError::input(
-            "--inverse-band-hz concerns a model's vibration link, but a bank compensates the \
-             hysteresis of each channel only",
+            "--inverse-band-hz and --within-slew concern a model's vibration link, but a bank \
+             compensates the hysteresis of each channel only",
         ));
     }
     let limits = args.limits.map(|l| vec![l]);
