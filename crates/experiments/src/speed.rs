@@ -155,15 +155,17 @@ fn drive_for(
         && model.vibration.is_some()
         && matches!(method, Method::Ihc | Method::Wihc)
     {
-        let drive = crate::slew_drive::slew_constrained_drive(
+        // A programme the solver could not finish (or too long) leaves the faithful drive:
+        // the run is then reported as not slew-constrained, never lost.
+        if let Ok(drive) = crate::slew_drive::slew_constrained_drive(
             model,
             method,
             (0.0, full_scale),
             desired,
             max_drive_step_v(stage),
-        )
-        .map_err(|e| StudyError::Option(format!("{}: {e}", approach.label)))?;
-        return Ok((drive.drive, drive.constrained));
+        ) {
+            return Ok((drive.drive, drive.constrained));
+        }
     }
     let (command, _) = approach.command_in_band(desired, full_scale, band_hz)?;
     Ok((command, false))
