@@ -35,6 +35,13 @@ impl HystcompMpim {
                  hystcomp_model_load first)",
             ));
         }
+        if file.output_map.is_some() {
+            return Err(Failure::invalid(
+                "the model has an output_map (its hysteresis link is psi^-1 of the MPIM), which \
+                 a forward MPIM handle would leave out; run it with hystcomp_model_predict (a \
+                 file: hystcomp_model_load first)",
+            ));
+        }
         Ok(Self {
             model: file.model()?,
             scales: Some((file.input.clone(), file.output.clone())),

@@ -296,6 +296,7 @@ fn main() {
             "per" => per_decade = x as usize,
             "ops" => options.operators = x as usize,
             "iops" => options.inverse_operators = x as usize,
+            "map" => options.output_map_degree = x as usize,
             "oe" => options.output_error_iterations = x as usize,
             "hold" => excitation.hold_s = x,
             "hold2" => excitation.second_hold_s = x,
@@ -374,6 +375,7 @@ fn main() {
     let measured = run(&stage, 1, &cmd);
     let base = IdentifyOptions {
         thresholds: Thresholds::Uniform(options.operators),
+        output_map_degree: options.output_map_degree,
         warmup: Warmup::Samples(0),
         max_fit_rms_percent: None,
         ..IdentifyOptions::default()

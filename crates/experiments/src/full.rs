@@ -48,6 +48,10 @@ pub struct FullOptions {
     pub operators: usize,
     /// The inverse (DIHC) chain's play operators.
     pub inverse_operators: usize,
+    /// The degree of both chains' output map (`IdentifyOptions::output_map_degree`: the
+    /// hysteresis link `psi^-1(H[v])`, Kuhnen's modified Prandtl-Ishlinskii structure; 1:
+    /// none, the MPIM alone).
+    pub output_map_degree: usize,
     /// In the speed study, the chain's vibration inverse is limited to this band, Hz
     /// (`hystcomp_io::compensator::ScaledCompensator::with_inverse_band`: the known trajectory
     /// low-passed with zero phase before it is inverted; indices against the trajectory
@@ -55,6 +59,15 @@ pub struct FullOptions {
     /// identified on.
     pub inverse_band_hz: Option<f64>,
 }
+
+/// The degree of the `full` pipeline's output map (`IdentifyOptions::output_map_degree`), in
+/// both chains. Chosen by held-out error on a creep-, dynamics- and noise-free copy of the
+/// stage (`examples/hyst_class_diag.rs`: the MPIM fitted on the hysteresis excitation, its
+/// prediction of the chain excitation's rate sweep and holds): degree 1 (none) 0.399 %, 2
+/// 0.279 %, 3 0.078 %, 4 0.081 %, 5 0.078 % of the range, so 3, the least within the noise of
+/// the best. The stage's Preisach density is tilted, its loops asymmetric: the MPIM alone
+/// cannot follow them, `psi^-1(H[v])` can (Kuhnen 2003, doi:10.3166/ejc.9.407-418).
+pub const OUTPUT_MAP_DEGREE: usize = 3;
 
 /// The default smoothness penalty on the `full` pipeline's creep weights
 /// (`hystcomp_identify::FitProblem::with_extra_smoothness`) when they are fitted jointly
@@ -95,6 +108,7 @@ impl Default for FullOptions {
             output_error_iterations: 0,
             operators: 10,
             inverse_operators: 10,
+            output_map_degree: OUTPUT_MAP_DEGREE,
             inverse_band_hz: None,
         }
     }
@@ -149,6 +163,7 @@ pub(crate) fn identify_full(
     let plant_options = IdentifyOptions {
         direction: Direction::Plant,
         thresholds: Thresholds::Uniform(options.operators),
+        output_map_degree: options.output_map_degree,
         ..base.clone()
     };
     let plant = identify_chain(command_v, measured_um, &plant_options, &chain)
@@ -156,6 +171,7 @@ pub(crate) fn identify_full(
     let inverse_options = IdentifyOptions {
         direction: Direction::Inverse,
         thresholds: Thresholds::Uniform(options.inverse_operators),
+        output_map_degree: options.output_map_degree,
         ..base.clone()
     };
     let inverse = identify_inverse_chain(command_v, measured_um, &inverse_options, &chain, &plant)

@@ -289,6 +289,15 @@ pub fn identify_chain(
         });
     }
     hystcomp_io::data::check_same_length(&[("voltage", voltage), ("displacement", displacement)])?;
+    if options.output_map_degree > 1 && chain.creep.as_ref().is_some_and(|c| !c.from_holds) {
+        return Err(IdentifyError::InvalidOption {
+            option: "output map degree",
+            value: options.output_map_degree.to_string(),
+            reason: "the joint fit of creep and hysteresis fits the MPIM alone; fit the creep \
+                     on the record's holds (--creep-fit holds) to add an output map"
+                .to_owned(),
+        });
+    }
     let plant_options = IdentifyOptions {
         direction: Direction::Plant,
         ..options.clone()

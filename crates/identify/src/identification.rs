@@ -4,7 +4,7 @@ use std::time::Instant;
 
 use hystcomp_core::{Compensator, Ihc, OutputLimits, SolveMode, Wihc};
 use hystcomp_io::data::{check_finite, check_min_samples, check_not_constant, check_same_length};
-use hystcomp_io::model_file::{Direction, ModelFile, Scale};
+use hystcomp_io::model_file::{Direction, ModelFile, OutputMapPart, Scale};
 use serde::{Deserialize, Serialize};
 
 use crate::options::{
@@ -107,8 +107,9 @@ pub fn identify_observed(
         };
     let thresholds = options.thresholds.values()?;
     let fit_offset = options.offset == OutputOffset::Fit;
-    let parameters_count =
-        parameter_count(&thresholds, fit_offset) + options.input_degree.saturating_sub(3) / 2;
+    let parameters_count = parameter_count(&thresholds, fit_offset)
+        + options.input_degree.saturating_sub(3) / 2
+        + options.output_map_degree.saturating_sub(1);
     let total = input.len();
     if total.saturating_mul(thresholds.len()) > MAX_REGRESSOR_VALUES {
         return Err(IdentifyError::InvalidOption {
@@ -178,13 +179,15 @@ pub fn identify_observed(
     let y: Vec<f64> = output.iter().map(|v| (v - y_reference) / y_scale).collect();
 
     let build = |data: ProblemData<'_>| {
-        FitProblem::with_input_degree(
+        FitProblem::with_output_map(
             data,
             &thresholds,
             options.direction,
             fit_offset,
             options.margin,
             options.input_degree,
+            options.output_map_degree,
+            &[],
         )
     };
     // The virtual history run before the first sample: estimated with the parameters, or none
@@ -271,6 +274,18 @@ pub fn identify_observed(
 
     // Errors of the model itself (the core's MPIM over the whole record), physical units.
     let output_offset = y_reference + parameters.offset * y_scale;
+    let output_map = (options.output_map_degree > 1)
+        .then(|| {
+            output_map_part(
+                problem.output_map_parameters(&solution.theta),
+                parameters.offset,
+            )
+        })
+        .transpose()?;
+    let map = match &output_map {
+        Some(m) => m.map()?,
+        None => hystcomp_core::OutputMap::identity(),
+    };
     let mut run = model.clone();
     for &v in &history {
         run.step(v);
@@ -278,7 +293,16 @@ pub fn identify_observed(
     let initial_memory = run.memory().to_vec();
     let predicted: Vec<f64> = x
         .iter()
-        .map(|&v| output_offset + y_scale * run.step(v))
+        .map(|&v| {
+            let h = run.step(v);
+            output_offset
+                + y_scale
+                    * if output_map.is_some() {
+                        map.invert(h)
+                    } else {
+                        h
+                    }
+        })
         .collect();
     let fit_stats = ErrorStats::new(&predicted[fit.clone()], &output[fit.clone()], y_scale)
         .expect("the fitting span is not empty");
@@ -386,6 +410,10 @@ pub fn identify_observed(
         [0.0, 1.0],
         &model,
     )?;
+    if output_map.is_some() {
+        file.output_map = output_map;
+        file.validate()?;
+    }
     file.description = Some(format!(
         "MPIM ({}) identified by hystcomp ({}) from {} samples: {} {} -> {} {}",
         options.direction,
@@ -402,6 +430,33 @@ pub fn identify_observed(
         report,
         parameters,
     })
+}
+
+/// The model file's output map for the fitted `psi(y) = y - sum_j e_j y^j` (`e = [e_2, ...]`)
+/// of the output normalised from the record's reference, `psi(y) = H + c`: in the file's
+/// normalised output `w = y - c` (its offset holds `c`), `psi_w(w) = psi(w + c) - c`, expanded
+/// by the binomial theorem; its range the constrained one, [`crate::problem::OUTPUT_MAP_RANGE`],
+/// shifted by `-c`.
+fn output_map_part(e: &[f64], c: f64) -> Result<OutputMapPart, IdentifyError> {
+    let degree = e.len() + 1;
+    let mut m = vec![0.0; degree + 1];
+    m[1] = 1.0;
+    for (q, &e_j) in e.iter().enumerate() {
+        let j = q + 2;
+        let mut binomial = 1.0;
+        for (i, m_i) in m.iter_mut().enumerate().take(j + 1) {
+            // C(j, i) c^(j - i)
+            *m_i -= e_j * binomial * c.powi((j - i) as i32);
+            binomial = binomial * (j - i) as f64 / (i + 1) as f64;
+        }
+    }
+    let (lo, hi) = crate::problem::OUTPUT_MAP_RANGE;
+    let part = OutputMapPart {
+        coefficients: m,
+        range: [lo - c, hi - c],
+    };
+    part.map()?;
+    Ok(part)
 }
 
 /// The number of parameters the fit of a model with these `thresholds` estimates: `a1`, `a2`

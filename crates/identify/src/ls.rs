@@ -117,7 +117,7 @@ pub(crate) fn polish_from(problem: &FitProblem, theta: &[f64]) -> Option<Solutio
         .collect();
     // Start from the constraints the point violates or that are active there.
     let active: Vec<usize> = (0..qp.rows.len())
-        .filter(|&j| dot(&qp.rows[j], &z) - qp.margin <= ACTIVE_TOLERANCE)
+        .filter(|&j| dot(&qp.rows[j], &z) - qp.bounds[j] <= ACTIVE_TOLERANCE)
         .collect();
     let (z, active) = qp.active_set(active)?;
     Some(finish(
@@ -130,7 +130,8 @@ pub(crate) fn polish_from(problem: &FitProblem, theta: &[f64]) -> Option<Solutio
     ))
 }
 
-/// `min 1/2 z' H z - g' z` subject to `rows z >= margin`, in the scaled coordinates
+/// `min 1/2 z' H z - g' z` subject to `rows z >= bounds` (`margin - shift` of each
+/// constraint), in the scaled coordinates
 /// `theta = S z`.
 struct QuadraticProgram {
     /// `R' R / N`.
@@ -139,6 +140,8 @@ struct QuadraticProgram {
     g: DVector<f64>,
     /// Constraint rows in `z` (`a_j` times `S`).
     rows: Vec<Vec<f64>>,
+    /// `margin - shift` of each row.
+    bounds: Vec<f64>,
     margin: f64,
     scale: DVector<f64>,
 }
@@ -164,6 +167,11 @@ impl QuadraticProgram {
             h,
             g,
             rows,
+            bounds: problem
+                .constraints()
+                .iter()
+                .map(|c| problem.margin() - c.shift)
+                .collect(),
             margin: problem.margin(),
             scale: scale.clone(),
         }
@@ -208,7 +216,7 @@ impl QuadraticProgram {
             colptr.push(rowval.len());
         }
         let big_a = CscMatrix::new(m, p, colptr, rowval, nzval);
-        let b = vec![-self.margin; m];
+        let b: Vec<f64> = self.bounds.iter().map(|b| -b).collect();
         let cones: [SupportedConeT<f64>; 1] = [NonnegativeConeT(m)];
         let settings = DefaultSettings {
             verbose: false,
@@ -257,7 +265,7 @@ impl QuadraticProgram {
                 kkt[(i, p + k)] = -self.rows[j][i];
                 kkt[(p + k, i)] = self.rows[j][i];
             }
-            rhs[p + k] = self.margin;
+            rhs[p + k] = self.bounds[j];
         }
         let lu = kkt.full_piv_lu();
         let x = lu.solve(&rhs)?;
@@ -291,7 +299,7 @@ impl QuadraticProgram {
             }
             let worst = (0..self.rows.len())
                 .filter(|j| !active.contains(j))
-                .map(|j| (j, dot(&self.rows[j], &z) - self.margin))
+                .map(|j| (j, dot(&self.rows[j], &z) - self.bounds[j]))
                 .min_by(|a, b| a.1.total_cmp(&b.1));
             match worst {
                 Some((j, slack)) if slack < -1e-12 * self.margin => {

@@ -246,10 +246,21 @@ pub struct IdentifyOptions {
     /// default), 5, 7 or 9. Least squares only: the particle swarm fits the cubic.
     #[serde(default = "paper_input_degree")]
     pub input_degree: usize,
+    /// The degree of the output map `psi(y) = y - e_2 y^2 - ... - e_K y^K` fitted jointly
+    /// with the MPIM, `psi(y) = H[x] + c` ([`crate::FitProblem::with_output_map`];
+    /// `hystcomp_core::OutputMap`): 1 (none, the paper's model and the default) to
+    /// [`crate::problem::MAX_OUTPUT_MAP_DEGREE`]. Least squares only.
+    #[serde(default = "no_output_map")]
+    pub output_map_degree: usize,
     /// Unit of the voltage samples, written to the model file.
     pub voltage_unit: String,
     /// Unit of the displacement samples, written to the model file.
     pub displacement_unit: String,
+}
+
+/// No output map: the default output map degree (serde's default for older options).
+fn no_output_map() -> usize {
+    1
 }
 
 /// The paper's cubic: the default input degree (serde's default for older options).
@@ -271,6 +282,7 @@ impl Default for IdentifyOptions {
             max_fit_rms_percent: Some(DEFAULT_MAX_FIT_RMS_PERCENT),
             delayed_loop_bound: None,
             input_degree: 3,
+            output_map_degree: 1,
             voltage_unit: "V".to_owned(),
             displacement_unit: "um".to_owned(),
         }
@@ -281,6 +293,14 @@ impl IdentifyOptions {
     /// Checks the options that do not depend on the data.
     pub fn validate(&self) -> Result<(), IdentifyError> {
         self.thresholds.values()?;
+        crate::problem::check_output_map_degree(self.output_map_degree)?;
+        if self.output_map_degree > 1 && self.method != Method::LeastSquares {
+            return Err(IdentifyError::InvalidOption {
+                option: "output map degree",
+                value: self.output_map_degree.to_string(),
+                reason: "the output map is fitted by least squares only; use ls".to_owned(),
+            });
+        }
         if let Some(bound) = self.delayed_loop_bound
             && !(bound > 0.0 && bound < 1.0)
         {

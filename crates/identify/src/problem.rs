@@ -199,6 +199,12 @@ pub enum ConstraintKind {
         /// `+1` or `-1`.
         sign: f64,
     },
+    /// `1 - sum_j j e_j w^(j - 1) >= margin`: the output map `psi(w) = w - sum_j e_j w^j`
+    /// rises at the normalised output `w` ([`FitProblem::with_output_map`]).
+    OutputMapSlope {
+        /// Normalised output `w`.
+        output: f64,
+    },
     /// `EXTRA_ROW_SCALE e_j >= margin`: an extra regressor's parameter is non-negative.
     ExtraNonNegative {
         /// Which extra parameter (0-based).
@@ -216,13 +222,25 @@ pub enum DelayedCompensator {
     Wihc,
 }
 
-/// One linear constraint `coefficients . theta >= margin` on the problem's parameter vector.
+/// One linear constraint `coefficients . theta + shift >= margin` on the problem's parameter
+/// vector.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct Constraint {
     /// One coefficient per entry of the parameter vector.
     pub coefficients: Vec<f64>,
+    /// A constant added to the row (0 but for the output map's slopes, whose normalisation
+    /// gives them a constant 1).
+    #[serde(default)]
+    pub shift: f64,
     /// What it stands for.
     pub kind: ConstraintKind,
+}
+
+impl Constraint {
+    /// `coefficients . theta + shift - margin`: non-negative when the constraint holds.
+    pub fn slack(&self, theta: &[f64], margin: f64) -> f64 {
+        dot(&self.coefficients, theta) + self.shift - margin
+    }
 }
 
 /// The normalised samples one problem is built from.
@@ -252,6 +270,8 @@ pub struct FitProblem {
     folded: bool,
     /// Extra regressor columns, whose parameters end `theta`.
     extra: usize,
+    /// The powers `2, ..., K` of the output map (before the extra parameters in `theta`).
+    output_map: Vec<usize>,
     /// The powers `5, 7, ..., D` of a higher-degree input polynomial (after `c` in `theta`).
     higher: Vec<usize>,
     /// `b_1 = split * a1` when folded.
@@ -300,7 +320,47 @@ impl FitProblem {
         margin: f64,
         extra: &[&[f64]],
     ) -> Result<Self, IdentifyError> {
-        Self::build(data, thresholds, direction, fit_offset, margin, extra, 3)
+        Self::build(data, thresholds, direction, fit_offset, margin, extra, 3, 1)
+    }
+
+    /// As [`FitProblem::with_input_degree`], with an output map of degree `map_degree`
+    /// (1: none; at most [`MAX_OUTPUT_MAP_DEGREE`]) and `extra` columns: the model becomes
+    /// `psi(y) = H[x] + c` with `psi(y) = y - e_2 y^2 - ... - e_K y^K` of the normalised output
+    /// `y`, so that `y = H[x] + c + sum_j e_j y^j` stays linear in every parameter (an equation
+    /// error, as Kuhnen's modified Prandtl-Ishlinskii operator `H = S^-1[Gamma]` is identified:
+    /// Kuhnen 2003, Eur. J. Control 9 407-418, doi:10.3166/ejc.9.407-418). The `e_j` follow
+    /// `c_5..` in `theta`, unconstrained in sign; `psi` is kept rising by the rows
+    /// `1 - sum_j j e_j w^(j-1) >= margin` at [`OUTPUT_MAP_GRID`]` + 1` points of
+    /// [`OUTPUT_MAP_RANGE`].
+    #[allow(clippy::too_many_arguments)]
+    pub fn with_output_map(
+        data: ProblemData<'_>,
+        thresholds: &[f64],
+        direction: Direction,
+        fit_offset: bool,
+        margin: f64,
+        input_degree: usize,
+        map_degree: usize,
+        extra: &[&[f64]],
+    ) -> Result<Self, IdentifyError> {
+        check_output_map_degree(map_degree)?;
+        Self::build(
+            data,
+            thresholds,
+            direction,
+            fit_offset,
+            margin,
+            extra,
+            input_degree,
+            map_degree,
+        )
+    }
+
+    /// The output map's `e_2, ..., e_K` of a parameter vector (empty without a map; see
+    /// [`FitProblem::with_output_map`]).
+    pub fn output_map_parameters<'t>(&self, theta: &'t [f64]) -> &'t [f64] {
+        let end = theta.len() - self.extra;
+        &theta[end - self.output_map.len()..end]
     }
 
     /// As [`FitProblem::new`], with the odd input polynomial of degree `degree` (3, 5, 7 or
@@ -314,9 +374,19 @@ impl FitProblem {
         margin: f64,
         degree: usize,
     ) -> Result<Self, IdentifyError> {
-        Self::build(data, thresholds, direction, fit_offset, margin, &[], degree)
+        Self::build(
+            data,
+            thresholds,
+            direction,
+            fit_offset,
+            margin,
+            &[],
+            degree,
+            1,
+        )
     }
 
+    #[allow(clippy::too_many_arguments)]
     fn build(
         data: ProblemData<'_>,
         thresholds: &[f64],
@@ -325,13 +395,15 @@ impl FitProblem {
         margin: f64,
         extra: &[&[f64]],
         degree: usize,
+        map_degree: usize,
     ) -> Result<Self, IdentifyError> {
         check_input_degree(degree)?;
         let ProblemData { input, output, fit } = data;
         let folded = thresholds.first() == Some(&0.0);
         let higher: Vec<usize> = (5..=degree).step_by(2).collect();
+        let output_map: Vec<usize> = (2..=map_degree).collect();
         let base = parameter_count(thresholds, fit_offset);
-        let own = base + higher.len();
+        let own = base + higher.len() + output_map.len();
         let p = own + extra.len();
         if let Some(column) = extra.iter().find(|c| c.len() != input.len()) {
             return Err(IdentifyError::InvalidOption {
@@ -380,6 +452,12 @@ impl FitProblem {
         for (q, &power) in higher.iter().enumerate() {
             for (i, &x) in span.iter().enumerate() {
                 phi[(i, base + q)] = x.powi(power as i32);
+            }
+        }
+        let out_span = &output[fit.clone()];
+        for (q, &power) in output_map.iter().enumerate() {
+            for (i, &y) in out_span.iter().enumerate() {
+                phi[(i, base + higher.len() + q)] = y.powi(power as i32);
             }
         }
         for (j, column) in extra.iter().enumerate() {
@@ -435,6 +513,7 @@ impl FitProblem {
             fit_offset,
             folded,
             extra: extra.len(),
+            output_map,
             higher,
             split,
             samples: rows,
@@ -549,6 +628,7 @@ impl FitProblem {
             names.push("c".to_owned());
         }
         names.extend(self.higher.iter().map(|j| format!("c{j}")));
+        names.extend(self.output_map.iter().map(|j| format!("m{j}")));
         names.extend((1..=self.extra).map(|j| format!("e{j}")));
         names
     }
@@ -630,7 +710,7 @@ impl FitProblem {
     pub fn violation(&self, theta: &[f64]) -> f64 {
         self.constraints
             .iter()
-            .map(|c| (self.margin - dot(&c.coefficients, theta)).max(0.0))
+            .map(|c| (-c.slack(theta, self.margin)).max(0.0))
             .sum()
     }
 
@@ -638,7 +718,7 @@ impl FitProblem {
     pub fn smallest_slack(&self, theta: &[f64]) -> f64 {
         self.constraints
             .iter()
-            .map(|c| dot(&c.coefficients, theta) - self.margin)
+            .map(|c| c.slack(theta, self.margin))
             .fold(f64::INFINITY, f64::min)
     }
 
@@ -648,7 +728,7 @@ impl FitProblem {
     pub fn active_count(&self, theta: &[f64]) -> usize {
         self.constraints
             .iter()
-            .filter(|c| (dot(&c.coefficients, theta) - self.margin).abs() <= ACTIVE_TOLERANCE)
+            .filter(|c| c.slack(theta, self.margin).abs() <= ACTIVE_TOLERANCE)
             .count()
     }
 
@@ -657,7 +737,7 @@ impl FitProblem {
     pub fn violated_count(&self, theta: &[f64]) -> usize {
         self.constraints
             .iter()
-            .filter(|c| dot(&c.coefficients, theta) - self.margin < -ACTIVE_TOLERANCE)
+            .filter(|c| c.slack(theta, self.margin) < -ACTIVE_TOLERANCE)
             .count()
     }
 
@@ -689,7 +769,7 @@ impl FitProblem {
         for q in 0..self.higher.len() {
             theta.push(parameters.higher.get(q).copied().unwrap_or(0.0));
         }
-        theta.resize(theta.len() + self.extra, 0.0);
+        theta.resize(theta.len() + self.output_map.len() + self.extra, 0.0);
         theta
     }
 
@@ -789,7 +869,11 @@ impl FitProblem {
                     .all(|(a, b)| (a - b).abs() <= 1e-12 * (1.0 + a.abs()))
             });
             if !duplicate {
-                rows.push(Constraint { coefficients, kind });
+                rows.push(Constraint {
+                    coefficients,
+                    shift: 0.0,
+                    kind,
+                });
             }
         };
         // Branch slopes: a2 + 3 a1 x^2 + b_1 + ... + b_k.
@@ -889,11 +973,56 @@ impl FitProblem {
             coefficients[p - self.extra + index] = EXTRA_ROW_SCALE;
             rows.push(Constraint {
                 coefficients,
+                shift: 0.0,
                 kind: ConstraintKind::ExtraNonNegative { index },
+            });
+        }
+        // The output map rises over the fitted outputs [0, 1] (and a little beyond).
+        let first = p - self.extra - self.output_map.len();
+        for i in 0..=OUTPUT_MAP_GRID {
+            let w = OUTPUT_MAP_RANGE.0
+                + (OUTPUT_MAP_RANGE.1 - OUTPUT_MAP_RANGE.0) * i as f64 / OUTPUT_MAP_GRID as f64;
+            if self.output_map.is_empty() {
+                break;
+            }
+            let mut coefficients = vec![0.0; p];
+            for (q, &j) in self.output_map.iter().enumerate() {
+                coefficients[first + q] = -(j as f64) * w.powi(j as i32 - 1);
+            }
+            rows.push(Constraint {
+                coefficients,
+                shift: 1.0,
+                kind: ConstraintKind::OutputMapSlope { output: w },
             });
         }
         rows
     }
+}
+
+/// The highest degree of the output map [`FitProblem::with_output_map`] fits.
+pub const MAX_OUTPUT_MAP_DEGREE: usize = hystcomp_core::MAX_OUTPUT_MAP_DEGREE;
+
+/// The normalised outputs the output map's slope constraints cover: the fitted range `[0, 1]`
+/// and a tenth beyond each end.
+pub const OUTPUT_MAP_RANGE: (f64, f64) = (-0.1, 1.1);
+
+/// Intervals of [`OUTPUT_MAP_RANGE`] at whose ends the output map's slope is constrained.
+pub const OUTPUT_MAP_GRID: usize = 60;
+
+/// Refuses an output map degree identification cannot fit: 1 (none) to
+/// [`MAX_OUTPUT_MAP_DEGREE`].
+pub(crate) fn check_output_map_degree(degree: usize) -> Result<(), IdentifyError> {
+    if (1..=MAX_OUTPUT_MAP_DEGREE).contains(&degree) {
+        return Ok(());
+    }
+    Err(IdentifyError::InvalidOption {
+        option: "output map degree",
+        value: degree.to_string(),
+        reason: format!(
+            "the output map psi(y) = y - e2 y^2 - ... is a polynomial of degree 1 (none) to \
+             {MAX_OUTPUT_MAP_DEGREE}"
+        ),
+    })
 }
 
 /// Refuses an input polynomial degree identification cannot fit: odd, 3 to

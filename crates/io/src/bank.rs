@@ -513,6 +513,12 @@ impl ScaledBank {
                         .into(),
                 });
             }
+            if let Err(e) = file.refuse_output_map("a bank (the MPIM alone on every channel)") {
+                return Err(ModelSetError::Set {
+                    path: format!("channel {k} ({})", c.name),
+                    message: e.to_string(),
+                });
+            }
             let (d, v): (&Scale, &Scale) = match file.direction {
                 Direction::Plant => (&file.output, &file.input),
                 Direction::Inverse => (&file.input, &file.output),

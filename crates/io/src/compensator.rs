@@ -6,8 +6,8 @@ use std::fmt;
 use std::str::FromStr;
 
 use hystcomp_core::{
-    ChainCompensator, Compensator, CoreError, Diagnostics, Dihc, Ihc, Mpim, OutputLimits,
-    SolveMode, Wihc,
+    ChainCompensator, Compensator, CoreError, Diagnostics, Dihc, Ihc, MapSide, MappedCompensator,
+    Mpim, OutputLimits, SolveMode, Wihc,
 };
 use serde::{Deserialize, Serialize};
 
@@ -377,6 +377,15 @@ impl ScaledCompensator {
         };
         let mut delayed_loop_gain = None;
         let mut guard_relaxation = None;
+        let map = model.output_map.as_ref().map(|m| m.map()).transpose()?;
+        // An inverse model's map acts on its output, the voltage: its DIHC works within the
+        // mapped limits and maps back (hystcomp_core::MappedCompensator).
+        let inner_limits = match (&map, model.direction) {
+            (Some(m), Direction::Inverse) => {
+                MappedCompensator::<f64, Hysteresis>::mapped_limits(m, normalised)?
+            }
+            _ => normalised,
+        };
         let inner: Box<dyn Compensator<f64> + Send> = match method {
             Method::Ihc | Method::IhcDelayed | Method::IhcGuarded => {
                 let ihc = Ihc::<f64, Vec<f64>>::new(&mpim, normalised, mode)?;
@@ -394,8 +403,18 @@ impl ScaledCompensator {
                 &mpim,
                 model.input_range[0],
                 model.input_range[1],
-                normalised,
+                inner_limits,
             )?),
+        };
+        let inner: Hysteresis = match map {
+            Some(m) => {
+                let side = match model.direction {
+                    Direction::Plant => MapSide::Desired,
+                    Direction::Inverse => MapSide::Control,
+                };
+                Box::new(MappedCompensator::new(inner, m, side, normalised))
+            }
+            None => inner,
         };
         let mut preview_samples = 0;
         let inner = if model.has_links() {

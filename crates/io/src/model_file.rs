@@ -66,7 +66,7 @@ use std::fmt;
 use std::path::Path;
 
 use hystcomp_core::{
-    CoreError, Creep, CreepInverse, InputPolynomial, Mpim, Vibration, VibrationInverse,
+    CoreError, Creep, CreepInverse, InputPolynomial, Mpim, OutputMap, Vibration, VibrationInverse,
 };
 use serde::{Deserialize, Serialize};
 
@@ -81,6 +81,29 @@ pub const READABLE_VERSIONS: [u32; 2] = [1, 2];
 
 /// The most creep elements a file may hold (the core's limit).
 pub const MAX_CREEP_ELEMENTS: usize = hystcomp_core::MAX_CREEP_ELEMENTS;
+
+/// The hysteresis link's output map (format version 2, optional): the MPIM's output equals
+/// `psi(w) = m_0 + m_1 w + ... + m_K w^K` of the model's normalised output
+/// `w = (output - output.offset) / output.scale` on `range` (continued linearly beyond it), so
+/// the model's output is `output.offset + output.scale * psi^-1(H[x])`
+/// (`hystcomp_core::OutputMap`; Kuhnen 2003, doi:10.3166/ejc.9.407-418). A plant file's IHC
+/// and WIHC solve for `psi(w_d)`; an inverse (DIHC) file's voltage is `psi^-1` of its MPIM's
+/// output.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct OutputMapPart {
+    /// `[m_0, m_1, ..., m_K]`, 2 to 6 of them.
+    pub coefficients: Vec<f64>,
+    /// The normalised outputs `[lo, hi]` on which `psi` is the polynomial, strictly increasing.
+    pub range: [f64; 2],
+}
+
+impl OutputMapPart {
+    /// The core's map (validated: strictly increasing on its range).
+    pub fn map(&self) -> Result<OutputMap<f64>, CoreError> {
+        OutputMap::new(&self.coefficients, self.range[0], self.range[1])
+    }
+}
 
 /// The creep link of a format-version-2 file (see the [module documentation](self)).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -247,6 +270,9 @@ pub struct ModelFile {
     /// (`c_1 = a2`, `c_3 = a1`); absent for the cubic. Format version 2.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub input_polynomial: Option<Vec<f64>>,
+    /// The hysteresis link's output map (format version 2), if any: see [`OutputMapPart`].
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub output_map: Option<OutputMapPart>,
     /// The sample rate of the record the time-dependent parts were identified on, Hz
     /// (format version 2; required with `creep` or `vibration`).
     #[serde(default, skip_serializing_if = "Option::is_none")]
@@ -401,6 +427,7 @@ impl ModelFile {
             a1,
             a2,
             input_polynomial: None,
+            output_map: None,
             sample_rate_hz: None,
             creep: None,
             vibration: None,
@@ -537,8 +564,51 @@ impl ModelFile {
                 });
             }
         }
+        if let Some(map) = &self.output_map {
+            if self.format_version < 2 {
+                return Err(ModelFileError::Invalid {
+                    message: "output_map needs format_version 2".to_owned(),
+                });
+            }
+            map.map().map_err(|e| ModelFileError::Invalid {
+                message: format!("output_map: {e}"),
+            })?;
+        }
         self.model()?;
         Ok(())
+    }
+
+    /// The output map's core form, the identity when the file has none.
+    pub fn core_output_map(&self) -> Result<OutputMap<f64>, CoreError> {
+        match &self.output_map {
+            Some(m) => m.map(),
+            None => Ok(OutputMap::identity()),
+        }
+    }
+
+    /// Refuses a file with an `output_map` for a user of the MPIM alone (`what` says who),
+    /// which would silently leave the map out.
+    pub fn refuse_output_map(&self, what: &str) -> Result<(), ModelFileError> {
+        if self.output_map.is_some() {
+            return Err(ModelFileError::Invalid {
+                message: format!(
+                    "the model has an output_map (its hysteresis link is psi^-1 of the MPIM), \
+                     which {what} would leave out; identify the model without an output map \
+                     (output map degree 1)"
+                ),
+            });
+        }
+        Ok(())
+    }
+
+    /// The physical output for the MPIM's output `h` (normalised): through the output map's
+    /// inverse when there is one.
+    pub fn hysteresis_output_to_physical(&self, map: &OutputMap<f64>, h: f64) -> f64 {
+        self.output_to_physical(if self.output_map.is_some() {
+            map.invert(h)
+        } else {
+            h
+        })
     }
 
     fn validate_links(&self) -> Result<(), ModelFileError> {
@@ -734,6 +804,7 @@ impl ModelFile {
 
     fn predict_from(&self, input: &[f64], settled: bool) -> Result<Vec<f64>, ModelFileError> {
         let mut model = self.model()?;
+        let map = self.core_output_map()?;
         let rate = self.sample_rate_hz.unwrap_or(1.0);
         match self.direction {
             Direction::Plant => {
@@ -743,7 +814,10 @@ impl ModelFile {
                 Ok(input
                     .iter()
                     .map(|&x| {
-                        let mut y = self.output_to_physical(model.step(self.normalise_input(x)));
+                        let mut y = self.hysteresis_output_to_physical(
+                            &map,
+                            model.step(self.normalise_input(x)),
+                        );
                         if let Some(c) = &mut creep {
                             if first {
                                 // At rest with input y: output origin + (y - origin) * gain.
@@ -774,7 +848,12 @@ impl ModelFile {
                     x.iter_mut().for_each(|x| *x = inverse.step(*x));
                 }
                 Ok(x.iter()
-                    .map(|&x| self.output_to_physical(model.step(self.normalise_input(x))))
+                    .map(|&x| {
+                        self.hysteresis_output_to_physical(
+                            &map,
+                            model.step(self.normalise_input(x)),
+                        )
+                    })
                     .collect())
             }
         }

@@ -477,8 +477,11 @@ impl Learner {
 /// limit, then the upper (the ascending branch from the bottom).
 fn reachable_range(model: &ModelFile, limits: (f64, f64)) -> Result<(f64, f64), LearnError> {
     let mut mpim = model.model()?;
-    let lo = model.output_to_physical(mpim.step(model.normalise_input(limits.0)));
-    let hi = model.output_to_physical(mpim.step(model.normalise_input(limits.1)));
+    let map = model
+        .core_output_map()
+        .map_err(hystcomp_io::model_file::ModelFileError::from)?;
+    let lo = model.hysteresis_output_to_physical(&map, mpim.step(model.normalise_input(limits.0)));
+    let hi = model.hysteresis_output_to_physical(&map, mpim.step(model.normalise_input(limits.1)));
     if !(lo.is_finite() && hi.is_finite() && lo < hi) {
         return Err(LearnError::Model(format!(
             "the model's displacement at the drive limits ({lo} .. {hi}) is not an increasing \

@@ -104,6 +104,13 @@ pub struct FitArgs {
     /// --vibration (the chain fits the cubic).
     #[arg(long, default_value_t = 3, value_name = "D")]
     pub input_degree: usize,
+    /// Degree of the output map psi(y) = y - e2 y^2 - ... - eK y^K fitted jointly with the
+    /// MPIM, psi(y) = H[v] + c (Kuhnen's modified Prandtl-Ishlinskii structure: asymmetric
+    /// loops, inverted analytically): 1 (none, the paper's model) to 5. The fit keeps psi
+    /// rising; IHC and WIHC solve for psi(y_d), DIHC maps its output back. The model file
+    /// gains an output_map field. Least squares only; with creep, --creep-fit holds.
+    #[arg(long, default_value_t = 1, value_name = "K")]
+    pub output_map_degree: usize,
     /// Where the play operators' memory at the start comes from, and so which samples are
     /// fitted. auto: up to the first sample where the voltage reaches the record's minimum or
     /// maximum, where the memory becomes known whatever came before (wiping-out). estimate:
@@ -483,6 +490,20 @@ impl FitArgs {
                 self.input_degree
             )));
         }
+        if !(1..=hystcomp_core::MAX_OUTPUT_MAP_DEGREE).contains(&self.output_map_degree) {
+            return Err(CliError::input(format!(
+                "--output-map-degree {} is not usable: give 1 (no output map) to {}",
+                self.output_map_degree,
+                hystcomp_core::MAX_OUTPUT_MAP_DEGREE
+            )));
+        }
+        if self.output_map_degree != 1 && self.method == "pso" {
+            return Err(CliError::input(format!(
+                "--output-map-degree {} needs --method ls: the output map is fitted by least \
+                 squares only",
+                self.output_map_degree
+            )));
+        }
         if self.input_degree != 3 && self.method == "pso" {
             return Err(CliError::input(format!(
                 "--input-degree {} needs --method ls: the particle swarm fits the paper's cubic \
@@ -591,6 +612,7 @@ impl FitArgs {
             },
             delayed_loop_bound: self.for_delayed.then_some(self.delayed_loop_bound),
             input_degree: self.input_degree,
+            output_map_degree: self.output_map_degree,
             voltage_unit: columns.voltage_unit.clone(),
             displacement_unit: columns.displacement_unit.clone(),
         };
