@@ -297,6 +297,8 @@ fn main() {
             "ops" => options.operators = x as usize,
             "iops" => options.inverse_operators = x as usize,
             "map" => options.output_map_degree = x as usize,
+            "pow" => options.threshold_exponent = x,
+            "seg" => options.dynamics.segment_gain = x > 0.0,
             "oe" => options.output_error_iterations = x as usize,
             "hold" => excitation.hold_s = x,
             "hold2" => excitation.second_hold_s = x,
@@ -352,6 +354,12 @@ fn main() {
                 .map(|t| format!("{:.4}", t.indices.e_rms_percent))
                 .collect();
             println!("learning {} / {}: {}", s.trajectory, s.start, e.join(" "));
+            let l: Vec<String> = s
+                .trials
+                .iter()
+                .map(|t| format!("{:.3}", t.limited_share))
+                .collect();
+            println!("   limited share: {}", l.join(" "));
             if let Some(best) = s.best_within(20) {
                 println!(
                     "   best within 20: {:.4} e_mhe {:.4}",

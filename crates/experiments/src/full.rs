@@ -48,6 +48,9 @@ pub struct FullOptions {
     pub operators: usize,
     /// The inverse (DIHC) chain's play operators.
     pub inverse_operators: usize,
+    /// Both chains' thresholds are `((i - 1) / n)^p` of the normalised input range for this
+    /// exponent `p` (see [`THRESHOLD_EXPONENT`]); 1 is the paper's uniform spacing, eq. (11).
+    pub threshold_exponent: f64,
     /// The degree of both chains' output map (`IdentifyOptions::output_map_degree`: the
     /// hysteresis link `psi^-1(H[v])`, Kuhnen's modified Prandtl-Ishlinskii structure; 1:
     /// none, the MPIM alone).
@@ -68,6 +71,23 @@ pub struct FullOptions {
 /// the best. The stage's Preisach density is tilted, its loops asymmetric: the MPIM alone
 /// cannot follow them, `psi^-1(H[v])` can (Kuhnen 2003, doi:10.3166/ejc.9.407-418).
 pub const OUTPUT_MAP_DEGREE: usize = 3;
+
+/// The exponent of the `full` pipeline's threshold spacing (see
+/// [`FullOptions::threshold_exponent`]): 1, the paper's uniform thresholds.
+///
+/// A minor loop of amplitude `a` (normalised) is shaped only by the play operators with
+/// `2 r_i < a`: with ten uniform thresholds, the speed study's 20 um raster (0.27 of the
+/// range) sees two of them, and its static error is the model's minor-loop error (measured by
+/// `examples/minor_loop_diag.rs`, seed 1, 10 Hz, rigid quiet copy: 0.525 % of the scan, of
+/// which 0.448 the loop's mean, hung from its top reversal at the wrong width). Thresholds
+/// crowded towards zero, `((i-1)/n)^1.5`, halve it (0.257 %) and meet every issue 11 target
+/// (100 Hz raster 0.462 % built-in, 0.446 % with 10x slew; 20 s 0.068 / 0.083 %) and are
+/// preferred by held-out error on the clean copy (`examples/hyst_class_diag.rs`: plant 0.078
+/// -> 0.066 %, inverse 0.224 -> 0.099 %), but their inverse asks larger drive steps at the
+/// raster's corners and the learning study's raster (issue 12, on the built-in amplifier)
+/// then has 13-16 % of its samples slew-limited (3-6 % with 1) and its best of 20 trials goes
+/// 0.057 -> 0.120 % (bound 0.1), so the default stays 1 (README, `full` pipeline).
+pub const THRESHOLD_EXPONENT: f64 = 1.0;
 
 /// The default smoothness penalty on the `full` pipeline's creep weights
 /// (`hystcomp_identify::FitProblem::with_extra_smoothness`) when they are fitted jointly
@@ -108,6 +128,7 @@ impl Default for FullOptions {
             output_error_iterations: 0,
             operators: 10,
             inverse_operators: 10,
+            threshold_exponent: THRESHOLD_EXPONENT,
             output_map_degree: OUTPUT_MAP_DEGREE,
             inverse_band_hz: None,
         }
@@ -162,7 +183,7 @@ pub(crate) fn identify_full(
     };
     let plant_options = IdentifyOptions {
         direction: Direction::Plant,
-        thresholds: Thresholds::Uniform(options.operators),
+        thresholds: thresholds(options.operators, options.threshold_exponent)?,
         output_map_degree: options.output_map_degree,
         ..base.clone()
     };
@@ -170,7 +191,7 @@ pub(crate) fn identify_full(
         .map_err(error("full plant (chain)"))?;
     let inverse_options = IdentifyOptions {
         direction: Direction::Inverse,
-        thresholds: Thresholds::Uniform(options.inverse_operators),
+        thresholds: thresholds(options.inverse_operators, options.threshold_exponent)?,
         output_map_degree: options.output_map_degree,
         ..base.clone()
     };
@@ -181,6 +202,20 @@ pub(crate) fn identify_full(
         inverse,
         seconds: started.elapsed().as_secs_f64(),
         creep_grid,
+    })
+}
+
+/// `n` thresholds `((i - 1) / n)^p`, `i = 1..n` (uniform, eq. (11), for `p = 1`).
+fn thresholds(n: usize, p: f64) -> Result<Thresholds, StudyError> {
+    if !(p.is_finite() && (0.25..=4.0).contains(&p)) {
+        return Err(StudyError::Option(format!(
+            "the full pipeline's threshold exponent is 0.25 to 4, not {p}"
+        )));
+    }
+    Ok(if p == 1.0 {
+        Thresholds::Uniform(n)
+    } else {
+        Thresholds::Given((0..n).map(|i| (i as f64 / n as f64).powf(p)).collect())
     })
 }
 
@@ -253,4 +288,28 @@ fn choose_creep_grid(
     }
     let chosen = best.map_or_else(|| base.clone(), |b| b.1);
     Ok((chosen, scores))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn thresholds_are_the_papers_for_exponent_one_and_crowd_towards_zero_above_it() {
+        assert_eq!(thresholds(10, 1.0).unwrap(), Thresholds::Uniform(10));
+        let uniform = Thresholds::Uniform(10).values().unwrap();
+        for p in [0.5, 1.5, 2.0, 3.7] {
+            let given = thresholds(10, p).unwrap().values().unwrap();
+            assert_eq!(given.len(), 10);
+            assert_eq!(given[0], 0.0);
+            for (g, u) in given.iter().zip(&uniform).skip(1) {
+                assert!((g - u.powf(p)).abs() < 1e-15);
+                // Above 1 every threshold moves towards zero, below 1 away from it.
+                assert_eq!(*g < *u, p > 1.0, "p {p}: {g} against {u}");
+            }
+        }
+        for p in [0.0, 0.2, 4.5, f64::NAN, f64::INFINITY] {
+            assert!(thresholds(10, p).is_err(), "{p}");
+        }
+    }
 }
