@@ -6,7 +6,7 @@
 //! bank; `holds=1` and `auto=1`: weights on the holds, smoothness chosen; `ops`, `iops`, `oe`,
 //! `res`, `delay`; the excitation's `hold`, `hold2`, `step`, `rest`, `vibamp`, `vibs`).
 //! Environment: `JOINT=1` the joint creep fit; `STUDY=1` runs the whole study and prints issue
-//! 11's summary; `FLOOR=1` identifies hysteresis-only MPIMs on the creep-, dynamics- and
+//! 11's summary (`STRONG=1`: on the stage with ten times the amplifier's slew rate); `FLOOR=1` identifies hysteresis-only MPIMs on the creep-, dynamics- and
 //! noise-free copy (`POWER=p`: thresholds `(i/n)^p`) and writes its n = 10 model to
 //! `/tmp/creep-mpim-stage.json`, which `STAGEHYST=mpim` then makes the stage's hysteresis;
 //! `STAGECREEP=off|log100|log1000|kv` changes the diagnostic stage's creep law; `DUMP=run`
@@ -323,13 +323,19 @@ fn main() {
             .on_holds(&cands);
     }
     if std::env::var("STUDY").is_ok() {
-        let study_options = hystcomp_experiments::StudyOptions {
+        let mut study_options = hystcomp_experiments::StudyOptions {
             full: FullOptions {
                 excitation: excitation.clone(),
                 ..options.clone()
             },
             ..Default::default()
         };
+        // STRONG=1: the whole study on the stage with the speed study's stronger amplifier
+        // (ten times the slew rate; diagnosis only: identification included).
+        if std::env::var("STRONG").as_deref() == Ok("1") {
+            study_options.stage.amplifier.peak_current_ma =
+                hystcomp_experiments::speed::STRONG_PEAK_CURRENT_MA;
+        }
         let t = std::time::Instant::now();
         let study = hystcomp_experiments::run_study(
             &study_options,
