@@ -206,7 +206,7 @@ pub(crate) fn identify_full(
 }
 
 /// `n` thresholds `((i - 1) / n)^p`, `i = 1..n` (uniform, eq. (11), for `p = 1`).
-fn thresholds(n: usize, p: f64) -> Result<Thresholds, StudyError> {
+pub(crate) fn thresholds(n: usize, p: f64) -> Result<Thresholds, StudyError> {
     if !(p.is_finite() && (0.25..=4.0).contains(&p)) {
         return Err(StudyError::Option(format!(
             "the full pipeline's threshold exponent is 0.25 to 4, not {p}"

@@ -409,6 +409,8 @@ pub fn run_study(
     options.stage.validate()?;
     let fs = options.stage.sample_rate_hz;
     check_run_lengths(options)?;
+    // The full pipeline's threshold spacing, before any run.
+    crate::full::thresholds(options.full.operators, options.full.threshold_exponent)?;
     let full_scale = options.stage.full_scale_command_v();
 
     // 1. Identification experiment.

@@ -414,6 +414,16 @@ fn bad_options_are_refused_with_the_reason() {
         })
         .contains("use at most 10000 bins")
     );
+    // The full pipeline's threshold spacing is checked before any run.
+    for p in [0.1, 5.0, f64::NAN] {
+        let mut options = StudyOptions::default();
+        options.full.threshold_exponent = p;
+        let message = err(options);
+        assert!(
+            message.contains("threshold exponent is 0.25 to 4"),
+            "{message}"
+        );
+    }
     let mut options = StudyOptions::default();
     options.stage.hysteresis.preisach.stroke_um = 30.0;
     let message = err(options);
