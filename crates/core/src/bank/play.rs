@@ -309,6 +309,10 @@ pub(crate) fn update_memory<T: Real, const W: usize>(
 
 /// [`update_memory`], with the counts of operators at either edge (`edges`) and the weighted
 /// sum (`sum`) asked for separately.
+///
+/// The operator rows are sliced once and walked four operators at a time, so that the four
+/// partial sums stay in registers; each combination of `edges`, `sum` and `uniform` has its
+/// own loop (no test inside it).
 #[allow(clippy::too_many_arguments)]
 #[inline(always)]
 pub(crate) fn update_memory_with<T: Real, const W: usize>(
@@ -324,63 +328,178 @@ pub(crate) fn update_memory_with<T: Real, const W: usize>(
     sum: bool,
     uniform: bool,
 ) -> Fed<T, W> {
-    let zero = Lanes::<T, W>::zero();
-    let mut rising = Lanes::splat(0u32);
-    let mut falling = Lanes::splat(0u32);
-    let mut partial = [zero; 4];
-    let mut tail = [zero; 3];
-    // The lanes' first operator beyond the four-way groups.
-    let full = operators.map(|n| n / 4 * 4);
-    let uniform_full = n / 4 * 4;
-    for i in 0..n {
-        let r = block.get(thresholds + i);
-        let w = block.get(memory + i);
+    let Some(rows) = OperatorRows::of(block, thresholds, weights, memory, n) else {
+        // The layouts always hold the rows (thresholds and weights before the memory).
+        return Fed {
+            rising: Lanes::splat(0),
+            falling: Lanes::splat(0),
+            sum: Lanes::zero(),
+        };
+    };
+    match (edges, sum, uniform) {
+        (false, false, _) => rows.update::<false, false, true>(operators, x, active),
+        (true, false, true) => rows.update::<true, false, true>(operators, x, active),
+        (true, false, false) => rows.update::<true, false, false>(operators, x, active),
+        (false, true, true) => rows.update::<false, true, true>(operators, x, active),
+        (false, true, false) => rows.update::<false, true, false>(operators, x, active),
+        (true, true, true) => rows.update::<true, true, true>(operators, x, active),
+        (true, true, false) => rows.update::<true, true, false>(operators, x, active),
+    }
+}
+
+/// The operator rows of a block: thresholds, weights and the memory they update.
+struct OperatorRows<'a, T, const W: usize> {
+    thresholds: &'a [[T; W]],
+    weights: &'a [[T; W]],
+    memory: &'a mut [[T; W]],
+}
+
+/// The running results of [`OperatorRows::update`].
+struct Accumulated<T: Real, const W: usize> {
+    rising: U<W>,
+    falling: U<W>,
+    partial: [L<T, W>; 4],
+    tail: [L<T, W>; 3],
+}
+
+impl<'a, T: Real, const W: usize> OperatorRows<'a, T, W> {
+    /// `n` rows of each from `thresholds`, `weights` and `memory` (the first two before the
+    /// third), if the block holds them.
+    #[inline(always)]
+    fn of(
+        block: &'a mut Block<'_, T, W>,
+        thresholds: usize,
+        weights: usize,
+        memory: usize,
+        n: usize,
+    ) -> Option<Self> {
+        let (head, rest) = block.values.split_at_mut_checked(memory)?;
+        Some(OperatorRows {
+            thresholds: head.get(thresholds..thresholds.checked_add(n)?)?,
+            weights: head.get(weights..weights.checked_add(n)?)?,
+            memory: rest.get_mut(..n)?,
+        })
+    }
+
+    /// Feeds `x` to every operator (the memory of the lanes of `active`), counting the
+    /// operators at either edge (`EDGES`) and summing `b_i w_i` (`SUM`) as
+    /// `crate::play::four_way_sum` does for each lane's own operator count (`UNIFORM`: every
+    /// lane has them all).
+    #[inline(always)]
+    fn update<const EDGES: bool, const SUM: bool, const UNIFORM: bool>(
+        self,
+        operators: U<W>,
+        x: L<T, W>,
+        active: Mask<T, W>,
+    ) -> Fed<T, W> {
+        let zero = Lanes::<T, W>::zero();
+        let mut acc = Accumulated {
+            rising: Lanes::splat(0u32),
+            falling: Lanes::splat(0u32),
+            partial: [zero; 4],
+            tail: [zero; 3],
+        };
+        // The lanes' first operator beyond the four-way groups.
+        let full = operators.map(|n| n / 4 * 4);
+        let (thresholds, t_rest) = self.thresholds.as_chunks::<4>();
+        let (weights, b_rest) = self.weights.as_chunks::<4>();
+        let (memory, m_rest) = self.memory.as_chunks_mut::<4>();
+        let mut i = 0usize;
+        for ((r4, b4), m4) in thresholds.iter().zip(weights).zip(memory.iter_mut()) {
+            for j in 0..4 {
+                Self::operator::<EDGES, SUM, UNIFORM>(
+                    &mut acc,
+                    i,
+                    Some(j),
+                    r4[j],
+                    b4[j],
+                    &mut m4[j],
+                    operators,
+                    full,
+                    x,
+                    active,
+                );
+                i += 1;
+            }
+        }
+        for ((r, b), m) in t_rest.iter().zip(b_rest).zip(m_rest.iter_mut()) {
+            Self::operator::<EDGES, SUM, UNIFORM>(
+                &mut acc, i, None, *r, *b, m, operators, full, x, active,
+            );
+            i += 1;
+        }
+        let partial = acc.partial;
+        let mut total = (partial[0] + partial[1]) + (partial[2] + partial[3]);
+        if SUM {
+            for (k, t) in acc.tail.into_iter().enumerate() {
+                let has = full.compare::<T>(operators, |f, n| f + (k as u32) < n);
+                total = (total + t).or_keep(has, total);
+            }
+        }
+        Fed {
+            rising: acc.rising,
+            falling: acc.falling,
+            sum: total,
+        }
+    }
+
+    /// Operator `i`: `group` is `i mod 4` within the four-way groups of the whole bank, `None`
+    /// beyond them.
+    #[allow(clippy::too_many_arguments)]
+    #[inline(always)]
+    fn operator<const EDGES: bool, const SUM: bool, const UNIFORM: bool>(
+        acc: &mut Accumulated<T, W>,
+        i: usize,
+        group: Option<usize>,
+        r: [T; W],
+        b: [T; W],
+        m: &mut [T; W],
+        operators: U<W>,
+        full: U<W>,
+        x: L<T, W>,
+        active: Mask<T, W>,
+    ) {
+        let (r, w) = (Lanes(r), Lanes(*m));
         // f_r(x, w) = max(x - r, min(x, w)) as `crate::play::one_sided` writes it.
         let lower = x - r;
         let raised = lower.or_keep(w.lt(lower), w);
         let next = x.or_keep(raised.gt(x), raised);
-        block.set(memory + i, next.or_keep(active, w));
+        *m = next.or_keep(active, w).0;
         let i32 = i as u32;
-        let inside = operators.test(|n| i32 < n);
-        if edges {
-            let (up, down) = if uniform {
+        if EDGES {
+            let (up, down) = if UNIFORM {
                 (next.le(lower), next.ge(x))
             } else {
+                let inside = operators.test(|n| i32 < n);
                 (next.le(lower) & inside, next.ge(x) & inside)
             };
-            rising = rising + up.count32();
-            falling = falling + down.count32();
+            acc.rising = acc.rising + up.count32();
+            acc.falling = acc.falling + down.count32();
         }
-        if !sum {
-            continue;
+        if !SUM {
+            return;
         }
-        let term = block.get(weights + i) * next;
-        if uniform {
-            if i < uniform_full {
-                partial[i % 4] = partial[i % 4] + term;
-            } else {
-                tail[(i - uniform_full).min(2)] = term;
+        let term = Lanes(b) * next;
+        if UNIFORM {
+            match group {
+                Some(j) => acc.partial[j] = acc.partial[j] + term,
+                None => {
+                    // At most three operators beyond the groups.
+                    let k = (i % 4).min(2);
+                    acc.tail[k] = term;
+                }
             }
         } else {
-            let grouped = full.test::<T>(|f| i32 < f);
-            partial[i % 4] = (partial[i % 4] + term).or_keep(grouped, partial[i % 4]);
-            for (k, t) in tail.iter_mut().enumerate() {
+            if let Some(j) = group {
+                let grouped = full.test::<T>(|f| i32 < f);
+                acc.partial[j] = (acc.partial[j] + term).or_keep(grouped, acc.partial[j]);
+            }
+            let inside = operators.test::<T>(|n| i32 < n);
+            for (k, t) in acc.tail.iter_mut().enumerate() {
                 let here = full.test(|f| f + k as u32 == i32) & inside;
                 *t = term.or_keep(here, *t);
             }
         }
-    }
-    let mut total = (partial[0] + partial[1]) + (partial[2] + partial[3]);
-    if sum {
-        for (k, t) in tail.into_iter().enumerate() {
-            let has = full.compare::<T>(operators, |f, n| f + (k as u32) < n);
-            total = (total + t).or_keep(has, total);
-        }
-    }
-    Fed {
-        rising,
-        falling,
-        sum: total,
     }
 }
 
