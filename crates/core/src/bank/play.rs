@@ -8,7 +8,7 @@
 //! end on the first segment, so a block usually walks once.
 
 use super::lanes::{Lanes, Mask};
-use super::storage::{Block, PlantRows};
+use super::storage::{Block, PlantRows, gather};
 use crate::Real;
 use crate::walk::SYNC_INTERVAL;
 
@@ -186,11 +186,16 @@ pub(crate) fn solve<T: Real, E: LaneEquation<T, W>, const W: usize>(
     let first = U::select(rising, state.rising, state.falling).zip(state.operators, u32::min);
     // The moving operators fold into the first segment: prefix[first - 1], and the reciprocal
     // slope 1 / (a + prefix[first - 1]) from the table (1 / a with none moving).
+    let n = rows.n;
+    let operator_rows = [
+        block.table(rows.memory(), n),
+        block.table(rows.thresholds(), n),
+        block.table(rows.weights(), n),
+    ];
     let some_moving = first.test::<T>(|k| k > 0);
     let before = first.map(|k| k.saturating_sub(1));
-    let moving_weight = block
-        .gather(rows.prefix(), before)
-        .or_keep(some_moving, zero);
+    let [prefix] = gather([block.table(rows.prefix(), n)], before);
+    let moving_weight = prefix.or_keep(some_moving, zero);
     let mut alpha = state.a + moving_weight;
     let mut beta = state.memory_sum - moving_weight * state.input;
     let mut moving = first;
@@ -205,9 +210,8 @@ pub(crate) fn solve<T: Real, E: LaneEquation<T, W>, const W: usize>(
         if !walking.any() {
             break;
         }
-        let w = block.gather(rows.memory(), cursor);
-        let r = block.gather(rows.thresholds(), cursor);
-        let b = block.gather(rows.weights(), cursor);
+        // Each lane's operator `cursor`: its memory, threshold and weight.
+        let [w, r, b] = gather(operator_rows, cursor);
         // Rising, operator i starts moving at u = max(w_i + r_i, lo); falling, at
         // l = min(w_i, hi).
         let breakpoint = (w + r).max(edge).or_keep(rising, w.min(edge));
@@ -259,9 +263,8 @@ pub(crate) fn solve<T: Real, E: LaneEquation<T, W>, const W: usize>(
     let inverse_alpha = if E::INVERSE_ALPHA {
         let some_moving = moving.test::<T>(|k| k > 0);
         let before = moving.map(|k| k.saturating_sub(1));
-        block
-            .gather(rows.inverse_alpha(), before)
-            .or_keep(some_moving, state.inverse_a)
+        let [inverse] = gather([block.table(rows.inverse_alpha(), n)], before);
+        inverse.or_keep(some_moving, state.inverse_a)
     } else {
         state.inverse_a
     };

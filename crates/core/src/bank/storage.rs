@@ -349,17 +349,41 @@ impl<T: Real, const W: usize> Block<'_, T, W> {
         }
     }
 
-    /// Lane `l` of row `base + index[l]`: each lane reads its own operator. A row beyond the
-    /// block (which only lanes whose result is discarded ask for) reads the block's last row:
-    /// the index is clamped, so that the compiler can drop the check of each lane's read.
+    /// The `count` rows from `base`: a table of one row per operator (empty if the block ends
+    /// before it, which the layout never asks for).
     #[inline(always)]
-    pub fn gather(&self, base: usize, index: Lanes<u32, W>) -> Lanes<T, W> {
-        let Some(last) = self.values.len().checked_sub(1) else {
-            return Lanes::zero();
-        };
-        Lanes(core::array::from_fn(|l| {
-            let row = base.saturating_add(index.0[l] as usize).min(last);
-            self.values.get(row).map_or(T::zero(), |r| r[l])
-        }))
+    pub fn table(&self, base: usize, count: usize) -> &[[T; W]] {
+        base.checked_add(count)
+            .and_then(|end| self.values.get(base..end))
+            .unwrap_or(&[])
     }
+}
+
+/// Lane `l` of row `index[l]` of each of `tables` (tables of equal length, from
+/// [`Block::table`]): each lane reads its own operator, the same row of every table, and
+/// computes where once for all of them. An index beyond the tables (which only lanes whose
+/// result is discarded ask for) reads their last row: the index is clamped to the tables'
+/// common length, so that the compiler drops the check of each lane's reads (a gather costs an
+/// extract, a load and an insert per lane and table).
+// Indexed by the lane, the form the compiler vectorises (as in `super::lanes`).
+#[allow(clippy::needless_range_loop)]
+#[inline(always)]
+pub(crate) fn gather<T: Real, const W: usize, const K: usize>(
+    tables: [&[[T; W]]; K],
+    index: Lanes<u32, W>,
+) -> [Lanes<T, W>; K] {
+    let n = tables.iter().map(|t| t.len()).min().unwrap_or(0);
+    let Some(last) = n.checked_sub(1) else {
+        return [Lanes::zero(); K];
+    };
+    // Each sliced to the common length `n`, so that `k <= last < n` needs no check below.
+    let tables = tables.map(|t| &t[..n]);
+    let mut out = [[T::zero(); W]; K];
+    for l in 0..W {
+        let k = (index.0[l] as usize).min(last);
+        for (o, t) in out.iter_mut().zip(&tables) {
+            o[l] = t[k][l];
+        }
+    }
+    out.map(Lanes)
 }
