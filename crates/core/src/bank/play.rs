@@ -624,3 +624,28 @@ pub(crate) fn reset<T: Real, const W: usize>(
     state.rising = state.always;
     state.falling = state.operators;
 }
+
+/// The counts of operators at either edge of their band, recomputed from the memory and the
+/// last input of every lane, as [`update_memory`] counts them when it feeds that input (the
+/// same comparisons on the same values, so the same counts): for a loop that feeds without
+/// counting (the plain delayed WIHC) and walks only now and then.
+#[inline(always)]
+pub(crate) fn recount<T: Real, const W: usize>(
+    block: &Block<'_, T, W>,
+    rows: &PlantRows,
+    state: &mut PlayState<T, W>,
+) {
+    let x = state.input;
+    let mut rising = Lanes::splat(0u32);
+    let mut falling = Lanes::splat(0u32);
+    for i in 0..rows.n {
+        let lower = x - block.get(rows.thresholds() + i);
+        let w = block.get(rows.memory() + i);
+        let i32 = i as u32;
+        let inside = state.operators.test::<T>(|n| i32 < n);
+        rising = rising + (w.le(lower) & inside).count32();
+        falling = falling + (w.ge(x) & inside).count32();
+    }
+    state.rising = rising;
+    state.falling = falling;
+}

@@ -7,7 +7,8 @@ use super::plant::{
     PlantKernel, all_odd_cubic, cubic_lanes, plant_bank, polynomial_lanes, write_lane,
 };
 use super::play::{
-    LaneEquation, LaneSolution, PlayState, ReachOnly, feed, feed_solved_or_full, solve,
+    LaneEquation, LaneSolution, PlayState, ReachOnly, feed, feed_solved_or_full, recount, solve,
+    update_memory_with,
 };
 use super::root::{LaneRemainder, increasing_root};
 use super::run::{BlockKernel, run};
@@ -281,6 +282,9 @@ impl PlantKernel<WihcMethod> {
             let check = clamped & active;
             let mut reachable = Mask::splat(false);
             if check.any() {
+                // The feeds below do not count the operators at the edges: the walk's counts
+                // from the memory (the same as a counting feed leaves).
+                recount(block, rows, &mut state);
                 let f_prev = remainder.value(v_prev) + state.output() - desired;
                 let s = solve(
                     block, rows, &state, &equation, f_prev, guard.min, guard.max, check,
@@ -288,7 +292,23 @@ impl PlantKernel<WihcMethod> {
                 reachable = check.and_not(s.saturated);
             }
             let v = guard.record(out, clamped, reachable, active);
-            feed(block, rows, &mut state, v, active, self.uniform);
+            // The memory and its weighted sum only: the counts of operators at the edges,
+            // which only the walk above reads, are recomputed before it runs.
+            let fed = update_memory_with(
+                block,
+                rows.thresholds(),
+                rows.weights(),
+                rows.memory(),
+                rows.n,
+                state.operators,
+                v,
+                active,
+                false,
+                true,
+                self.uniform,
+            );
+            state.input = v.or_keep(active, state.input);
+            state.memory_sum = fed.sum.or_keep(active, state.memory_sum);
             v
         };
         state.store(block, rows);
