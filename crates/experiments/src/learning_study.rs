@@ -153,6 +153,7 @@ fn learn(
     trajectory: &str,
     (label, model): (&str, &ModelFile),
     desired: &[f64],
+    max_drive_step: Option<f64>,
 ) -> Result<LearningSeries, StudyError> {
     let (trials, periods, bins) = if trajectory == PAPER {
         (PAPER_TRIALS, PAPER_PERIODS_PER_TRIAL, PAPER_MHE_BINS)
@@ -164,6 +165,7 @@ fn learn(
     };
     let mut options = LearningOptions::new(stage.sample_rate_hz);
     options.mhe_bins = bins;
+    options.max_drive_step = max_drive_step;
     let mut learner = Learner::new(model, desired, options).map_err(|e| failed(&e))?;
     let played = run_trials(stage, seed, &mut learner, trials, periods, &mut |_| {})
         .map_err(|e| failed(&e))?;
@@ -240,12 +242,14 @@ pub fn learning_checks(series: &[LearningSeries]) -> Vec<AcceptanceCheck> {
 
 /// Runs the learning study on `stage` (see the [module documentation](self)): the paper's
 /// trajectory and the raster, each learned from the `exact` and the `full` plant model's IHC,
-/// the four series in parallel.
+/// the four series in parallel; with `max_drive_step` (command volts per sample) every
+/// trial's drive is kept within it (`hystcomp_learn::slew`).
 pub(crate) fn run_learning(
     stage: &StageConfig,
     seed: u64,
     exact: &ModelFile,
     full: &ModelFile,
+    max_drive_step: Option<f64>,
 ) -> Result<LearningStudy, StudyError> {
     let fs = stage.sample_rate_hz;
     let paper = Signal::paper(1.0, crate::Reference::paper().trajectory.period_s, fs)
@@ -260,7 +264,9 @@ pub(crate) fn run_learning(
     ];
     let series: Vec<LearningSeries> = jobs
         .par_iter()
-        .map(|(trajectory, start, desired)| learn(stage, seed, trajectory, *start, desired))
+        .map(|(trajectory, start, desired)| {
+            learn(stage, seed, trajectory, *start, desired, max_drive_step)
+        })
         .collect::<Result<_, _>>()?;
     Ok(LearningStudy {
         checks: learning_checks(&series),

@@ -75,6 +75,11 @@ pub struct StudyOptions {
     /// The `full` pipeline (hysteresis, creep and vibration) and what the excitation gains for
     /// it.
     pub full: FullOptions,
+    /// The learning study's drive kept within the amplifier's slew rate: every trial's drive
+    /// projected onto the drives whose steps are within [`crate::speed::max_drive_step_v`]
+    /// (the speed study's margin of the slew rate) and the reference learned from the
+    /// projected drive (`hystcomp_learn::slew`, constrained ILC). Off by default.
+    pub slew_aware_learning: bool,
 }
 
 impl Default for StudyOptions {
@@ -93,6 +98,7 @@ impl Default for StudyOptions {
             },
             mhe_bins: DEFAULT_MHE_BINS,
             full: FullOptions::default(),
+            slew_aware_learning: false,
         }
     }
 }
@@ -899,6 +905,9 @@ pub fn run_study(
         tracking_seed,
         &exact_plant.model,
         &full_plant.model,
+        options
+            .slew_aware_learning
+            .then(|| crate::speed::max_drive_step_v(&options.stage)),
     )?;
     observer.end();
 

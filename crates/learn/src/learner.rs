@@ -8,6 +8,7 @@ use serde::{Deserialize, Serialize};
 use crate::LearnError;
 use crate::filter::LearningFilter;
 use crate::options::{Inverse, LearningOptions, MAX_TRIAL_SAMPLES};
+use crate::slew::project_slew;
 
 /// Periods a periodic record is run for to reach the hysteresis' periodic state: the drive
 /// and the recovered reference are taken from the middle one (the play operators' memory is
@@ -48,6 +49,10 @@ pub struct LearningLaw {
     /// Whether the model has a vibration link (the compensator then inverts the stage's
     /// dynamics and the learning may reach higher).
     pub model_has_vibration: bool,
+    /// The largest drive step per sample the drive is projected within
+    /// ([`LearningOptions::max_drive_step`]); `None`: not projected.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub max_drive_step: Option<f64>,
 }
 
 /// What stopped the learning, if anything.
@@ -219,6 +224,7 @@ impl Learner {
             inverse: options.inverse,
             limits,
             model_has_vibration: has_vibration,
+            max_drive_step: options.max_drive_step,
         };
         let mut learner = Learner {
             model: model.clone(),
@@ -258,6 +264,9 @@ impl Learner {
                     .map(|y| y.clamp(reachable.0, reachable.1))
                     .collect();
                 learner.drive = learner.inverse(&learner.reference)?;
+                if learner.options.max_drive_step.is_some() {
+                    learner.reference = learner.forward(&learner.drive)?;
+                }
             }
         }
         Ok(learner)
@@ -294,10 +303,14 @@ impl Learner {
         c.process(&input, &mut out)?;
         let start = (passes / 2) * n;
         let (lo, hi) = self.law.limits;
-        Ok(out[start..start + n]
+        let drive: Vec<f64> = out[start..start + n]
             .iter()
             .map(|v| v.clamp(lo, hi))
-            .collect())
+            .collect();
+        Ok(match self.options.max_drive_step {
+            Some(r) => project_slew(&drive, r, (lo, hi), self.options.periodic).drive,
+            None => drive,
+        })
     }
 
     /// `P[v]`: the reference a drive follows, from the middle period of a periodic record.
@@ -447,6 +460,14 @@ impl Learner {
             .collect();
         // e_next = e - z^-m (r_next - r): the change arrives `m` samples later.
         let m = self.options.lead_samples;
+        // Constrained: the drive is the slew-feasible projection of `C[next]` and the reference
+        // the model's response to it, what the next trial actually follows (crate::slew).
+        let drive = self.inverse(&next)?;
+        let next = if self.options.max_drive_step.is_some() {
+            self.forward(&drive)?
+        } else {
+            next
+        };
         let predicted_measured: Vec<f64> = (0..n)
             .map(|k| {
                 let change = if k >= m {
@@ -461,7 +482,7 @@ impl Learner {
             .collect();
         let predicted =
             TrackingIndices::compute(&self.desired, &predicted_measured, self.options.mhe_bins)?;
-        self.drive = self.inverse(&next)?;
+        self.drive = drive;
         self.reference = next;
         Ok(Update {
             trial,

@@ -99,6 +99,7 @@ mod error;
 pub mod filter;
 mod learner;
 mod options;
+pub mod slew;
 
 pub use error::LearnError;
 pub use filter::LearningFilter;

@@ -72,6 +72,13 @@ pub struct LearningOptions {
     pub limits: Option<(f64, f64)>,
     /// Bins of the `y_d` range for e_mhe.
     pub mhe_bins: usize,
+    /// The largest drive step per sample the amplifier follows linearly (its slew rate over
+    /// the sample rate, with a margin), in the model's voltage unit; `Some`: every trial's
+    /// drive is projected onto the slew-feasible drives and the reference learned from the
+    /// projected one (constrained ILC, see [`crate::slew`]); `None` (the default): the exact
+    /// inverse's drive, whatever slew it asks.
+    #[serde(default)]
+    pub max_drive_step: Option<f64>,
 }
 
 impl LearningOptions {
@@ -88,6 +95,7 @@ impl LearningOptions {
             inverse: Inverse::Ihc,
             limits: None,
             mhe_bins: DEFAULT_MHE_BINS,
+            max_drive_step: None,
         }
     }
 
@@ -160,6 +168,15 @@ impl LearningOptions {
                 "drive limits",
                 format!("{lo} .. {hi}"),
                 "both must be finite and the lower below the upper".into(),
+            );
+        }
+        if let Some(r) = self.max_drive_step
+            && !(r.is_finite() && r > 0.0)
+        {
+            return bad(
+                "largest drive step",
+                Shown(r).to_string(),
+                "give the largest drive step per sample, above 0 and finite".into(),
             );
         }
         if self.mhe_bins == 0 {

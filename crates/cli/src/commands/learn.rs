@@ -286,6 +286,7 @@ fn options(args: &Args, sample_rate_hz: f64) -> Result<LearningOptions, CliError
         inverse: args.inverse,
         limits: args.limits,
         mhe_bins: args.bins,
+        max_drive_step: None,
     };
     options.validate().map_err(learn_error)?;
     Ok(options)
