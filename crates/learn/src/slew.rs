@@ -102,7 +102,7 @@ pub fn project_slew(
     // of a periodic record (with the odd steps when n is even: it then shares no sample with
     // them; alone when n is odd).
     let wrap = periodic && n > 2;
-    let sets = if wrap && n % 2 == 1 { 4 } else { 3 };
+    let sets = if wrap && !n.is_multiple_of(2) { 4 } else { 3 };
     let project = |set: usize, v: &mut [f64]| match set {
         0 => (0..n - 1)
             .step_by(2)
@@ -111,7 +111,7 @@ pub fn project_slew(
             (1..n - 1)
                 .step_by(2)
                 .for_each(|k| pair(v, k, k + 1, max_step));
-            if wrap && n % 2 == 0 {
+            if wrap && n.is_multiple_of(2) {
                 pair(v, n - 1, 0, max_step);
             }
         }

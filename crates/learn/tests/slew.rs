@@ -42,7 +42,7 @@ fn the_projection_is_the_nearest_feasible_drive() {
     let mut rng = ChaCha8Rng::seed_from_u64(12);
     for case in 0..200 {
         let n = rng.random_range(2..40usize);
-        let periodic = case % 2 == 0;
+        let periodic = case.is_multiple_of(2);
         let r = rng.random_range(0.05..0.5);
         let limits = (-1.0, 1.0);
         let w: Vec<f64> = (0..n).map(|_| rng.random_range(-1.5..1.5)).collect();
