@@ -40,7 +40,7 @@ fn feasible(
 #[test]
 fn the_projection_is_the_nearest_feasible_drive() {
     let mut rng = ChaCha8Rng::seed_from_u64(12);
-    for case in 0..200 {
+    for case in 0..200usize {
         let n = rng.random_range(2..40usize);
         let periodic = case.is_multiple_of(2);
         let r = rng.random_range(0.05..0.5);
