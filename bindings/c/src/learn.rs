@@ -186,6 +186,9 @@ fn options_arg(o: &HystcompLearningOptions) -> Result<LearningOptions, Failure> 
         } else {
             o.mhe_bins
         },
+        // The slew-projected learned drive is measured worse on the built-in stage (README):
+        // not offered through the C ABI yet.
+        max_drive_step: None,
     };
     options.validate().map_err(learn_failure)?;
     Ok(options)

@@ -142,6 +142,9 @@ impl Learner {
             inverse: parse_inverse(inverse)?,
             limits: limits.map(|l| pair(l, "limits")).transpose()?,
             mhe_bins,
+            // The slew-projected learned drive is measured worse on the built-in stage (README):
+            // not offered here yet.
+            max_drive_step: None,
         };
         // Options are checked before the records' length (bounded there) allocates anything.
         options.validate().map_err(learn_error)?;
