@@ -189,6 +189,7 @@ fn options_arg(o: &HystcompLearningOptions) -> Result<LearningOptions, Failure> 
         // The slew-projected learned drive is measured worse on the built-in stage (README):
         // not offered through the C ABI yet.
         max_drive_step: None,
+        anti_windup: None,
     };
     options.validate().map_err(learn_failure)?;
     Ok(options)

@@ -145,6 +145,7 @@ impl Learner {
             // The slew-projected learned drive is measured worse on the built-in stage (README):
             // not offered here yet.
             max_drive_step: None,
+            anti_windup: None,
         };
         // Options are checked before the records' length (bounded there) allocates anything.
         options.validate().map_err(learn_error)?;

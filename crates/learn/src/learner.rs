@@ -6,6 +6,9 @@ use hystcomp_io::model_file::{Direction, ModelFile};
 use serde::{Deserialize, Serialize};
 
 use crate::LearnError;
+use crate::amplifier::{
+    AntiWindup, AntiWindupLaw, amplifier_output, delivered_drive, slew_feasible_drive,
+};
 use crate::filter::LearningFilter;
 use crate::options::{Inverse, LearningOptions, MAX_TRIAL_SAMPLES};
 use crate::slew::project_slew;
@@ -53,6 +56,10 @@ pub struct LearningLaw {
     /// ([`LearningOptions::max_drive_step`]); `None`: not projected.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub max_drive_step: Option<f64>,
+    /// The anti-windup against the amplifier's slew limit ([`LearningOptions::anti_windup`]);
+    /// `None`: none.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub anti_windup: Option<AntiWindup>,
 }
 
 /// What stopped the learning, if anything.
@@ -225,6 +232,7 @@ impl Learner {
             limits,
             model_has_vibration: has_vibration,
             max_drive_step: options.max_drive_step,
+            anti_windup: options.anti_windup,
         };
         let mut learner = Learner {
             model: model.clone(),
@@ -255,7 +263,7 @@ impl Learner {
                         ),
                     });
                 }
-                learner.reference = learner.forward(drive)?;
+                learner.reference = learner.state_of(drive)?;
                 learner.drive = drive.to_vec();
             }
             None => {
@@ -264,8 +272,8 @@ impl Learner {
                     .map(|y| y.clamp(reachable.0, reachable.1))
                     .collect();
                 learner.drive = learner.inverse(&learner.reference)?;
-                if learner.options.max_drive_step.is_some() {
-                    learner.reference = learner.forward(&learner.drive)?;
+                if learner.resets_state() {
+                    learner.reference = learner.state_of(&learner.drive)?;
                 }
             }
         }
@@ -307,9 +315,23 @@ impl Learner {
             .iter()
             .map(|v| v.clamp(lo, hi))
             .collect();
-        Ok(match self.options.max_drive_step {
+        let drive = match self.options.max_drive_step {
             Some(r) => project_slew(&drive, r, (lo, hi), self.options.periodic).drive,
             None => drive,
+        };
+        Ok(match self.options.anti_windup {
+            Some(AntiWindup {
+                amplifier,
+                law: AntiWindupLaw::Projected { margin },
+            }) => slew_feasible_drive(
+                &amplifier,
+                self.options.sample_rate_hz,
+                &drive,
+                (lo, hi),
+                self.options.periodic,
+                margin,
+            ),
+            _ => drive,
         })
     }
 
@@ -321,6 +343,28 @@ impl Learner {
         let out = self.model.predict(&input)?;
         let start = (passes / 2) * n;
         Ok(out[start..start + n].to_vec())
+    }
+
+    /// Whether the learner's state is the reference of a drive other than `C[r]` itself (the
+    /// slew-projected one, or what the amplifier delivers of it).
+    fn resets_state(&self) -> bool {
+        self.options.max_drive_step.is_some()
+            || self.options.anti_windup.is_some_and(|aw| aw.resets_state())
+    }
+
+    /// The learner's state for a drive: the reference the model follows for it (`P[v]`), or
+    /// with a resetting [`LearningOptions::anti_windup`] for what the amplifier delivers of it
+    /// (`P[A^-1[A[v]]]`).
+    fn state_of(&self, drive: &[f64]) -> Result<Vec<f64>, LearnError> {
+        match &self.options.anti_windup {
+            Some(aw) if aw.resets_state() => self.forward(&delivered_drive(
+                &aw.amplifier,
+                self.options.sample_rate_hz,
+                drive,
+                self.options.periodic,
+            )),
+            _ => self.forward(drive),
+        }
     }
 
     /// Restores what earlier trials measured, for a learner resumed from files
@@ -424,7 +468,7 @@ impl Learner {
                 factor: self.options.divergence_factor,
             };
             self.drive = best_drive.clone();
-            self.reference = self.forward(&self.drive)?;
+            self.reference = self.state_of(&self.drive)?;
             self.stopped = Some((trial, *best_trial));
             return Ok(Update {
                 trial,
@@ -443,6 +487,27 @@ impl Learner {
             .zip(measured)
             .map(|(d, y)| d - y)
             .collect();
+        let mut error = error;
+        if let Some(AntiWindup {
+            amplifier,
+            law: AntiWindupLaw::Conditional,
+        }) = &self.options.anti_windup
+        {
+            let fs = self.options.sample_rate_hz;
+            let u = amplifier_output(amplifier, fs, &self.drive, self.options.periodic);
+            let full = amplifier.slew_rate_per_s / fs * (1.0 - 1e-9);
+            for k in 0..n {
+                let before = match k {
+                    0 if self.options.periodic => u[n - 1],
+                    0 => 0.0,
+                    _ => u[k - 1],
+                };
+                let step = u[k] - before;
+                if step.abs() >= full && error[k] * step > 0.0 {
+                    error[k] = 0.0;
+                }
+            }
+        }
         self.filter.apply(&error, &mut self.correction);
         let (lo, hi) = self.reachable;
         let mut clamped_samples = 0;
@@ -462,9 +527,11 @@ impl Learner {
         let m = self.options.lead_samples;
         // Constrained: the drive is the slew-feasible projection of `C[next]` and the reference
         // the model's response to it, what the next trial actually follows (crate::slew).
+        // With the amplifier's specification, the reference of what it delivers of that drive
+        // (crate::amplifier: the undeliverable correction dropped, not accumulated).
         let drive = self.inverse(&next)?;
-        let next = if self.options.max_drive_step.is_some() {
-            self.forward(&drive)?
+        let next = if self.resets_state() {
+            self.state_of(&drive)?
         } else {
             next
         };

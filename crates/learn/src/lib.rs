@@ -95,12 +95,14 @@
 //! ```
 #![warn(missing_docs)]
 
+pub mod amplifier;
 mod error;
 pub mod filter;
 mod learner;
 mod options;
 pub mod slew;
 
+pub use amplifier::{AmplifierSpec, AntiWindup, AntiWindupLaw};
 pub use error::LearnError;
 pub use filter::LearningFilter;
 pub use learner::{Learner, LearningLaw, Status, Update};

@@ -5,6 +5,7 @@ use hystcomp_indices::DEFAULT_MHE_BINS;
 use serde::{Deserialize, Serialize};
 
 use crate::LearnError;
+use crate::amplifier::{AntiWindup, AntiWindupLaw};
 
 /// The most samples one trial may have (5 000 000: 500 s at 10 kHz). The update holds about
 /// ten copies of a trial in memory (the records, the learned reference, the drive, the best
@@ -79,6 +80,12 @@ pub struct LearningOptions {
     /// inverse's drive, whatever slew it asks.
     #[serde(default)]
     pub max_drive_step: Option<f64>,
+    /// Anti-windup against the amplifier's slew limit ([`crate::amplifier`]); `None` (the
+    /// default): the learner knows nothing of the amplifier. Measured on the learning study's
+    /// 100 Hz raster, every law destabilises the learning (README, learning from repetition):
+    /// not for use yet.
+    #[serde(default)]
+    pub anti_windup: Option<AntiWindup>,
 }
 
 impl LearningOptions {
@@ -96,6 +103,7 @@ impl LearningOptions {
             limits: None,
             mhe_bins: DEFAULT_MHE_BINS,
             max_drive_step: None,
+            anti_windup: None,
         }
     }
 
@@ -178,6 +186,29 @@ impl LearningOptions {
                 Shown(r).to_string(),
                 "give the largest drive step per sample, above 0 and finite".into(),
             );
+        }
+        if let Some(aw) = &self.anti_windup {
+            let a = aw.amplifier;
+            if !a.is_valid() {
+                return bad(
+                    "amplifier",
+                    format!(
+                        "bandwidth {} Hz, slew rate {} /s",
+                        Shown(a.bandwidth_hz),
+                        Shown(a.slew_rate_per_s)
+                    ),
+                    "give the amplifier's bandwidth and slew rate, both above 0 and finite".into(),
+                );
+            }
+            if let AntiWindupLaw::Projected { margin } = aw.law
+                && !(margin.is_finite() && margin > 0.0 && margin <= 1.0)
+            {
+                return bad(
+                    "anti-windup margin",
+                    Shown(margin).to_string(),
+                    "give a share of the slew rate above 0 and at most 1".into(),
+                );
+            }
         }
         if self.mhe_bins == 0 {
             return bad("e_mhe bins", "0".into(), "give at least 1".into());

@@ -287,6 +287,7 @@ fn options(args: &Args, sample_rate_hz: f64) -> Result<LearningOptions, CliError
         limits: args.limits,
         mhe_bins: args.bins,
         max_drive_step: None,
+        anti_windup: None,
     };
     options.validate().map_err(learn_error)?;
     Ok(options)
