@@ -42,14 +42,16 @@
 //! changes nothing. With Delivered the slewing share climbs back (11 to 18 %) and most of the
 //! error sits at the corners when it stops; neither half the gain nor a phase lead of 1, 2 or
 //! 4 samples keeps it from diverging. With Conditional, 99 % of the error left is at the
-//! slewing corners: the error the plain learner reduces by over-asking. The wound-up
-//! reference is not dead weight: an ask beyond what the amplifier delivers in a sample keeps
-//! it slewing longer into the corner, the correction the corner needs, and deep in the limit
-//! a further ask moves the output little, which keeps the plain learning stable while it
-//! crawls. Our reading of the divergence, not isolated further: re-set to the edge of the
-//! limit, a larger ask lengthens the ramp (its effect appears where the ramp ends), a
-//! response the update, which assumes `P[C[r]] = r`, does not know. So these laws stay off;
-//! the cure would be a learning update that knows the amplifier's response (its gradient
+//! slewing corners. So the windup is not what limits the plain learner: its wound-up ask
+//! changes nothing in the trial (the least drive [`delivered_drive`] gives the same output),
+//! it only absorbs the part of each correction that falls on the slewing samples, while `Q`
+//! spreads the corner's error onto the neighbouring samples, where the drive still acts:
+//! slow but stable. Conditional removes the corner's
+//! error from the learning, and that is lost. Our reading of the divergence of Delivered and
+//! Projected, not isolated further: re-set to the edge of the limit, a correction is no
+//! longer absorbed, and a larger ask lengthens the ramp (its effect appears where the ramp
+//! ends), a response the update, which assumes `P[C[r]] = r`, does not know. So these laws
+//! stay off; the cure would be a learning update that knows the amplifier's response (its gradient
 //! through the slew limit), not an anti-windup.
 //!
 //! # The amplifier's response
