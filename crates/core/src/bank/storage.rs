@@ -376,13 +376,15 @@ pub(crate) fn gather<T: Real, const W: usize, const K: usize>(
     let Some(last) = n.checked_sub(1) else {
         return [Lanes::zero(); K];
     };
-    // Each sliced to the common length `n`, so that `k <= last < n` needs no check below.
-    let tables = tables.map(|t| &t[..n]);
+    // Each sliced to the common length `n`, so that `k <= last < n` needs no check below
+    // (`get`, not an index: where the compiler cannot see `n` is every table's length, as on
+    // a Cortex-M build, the step keeps no path to a panic; a table is never shorter).
+    let tables = tables.map(|t| t.get(..n).unwrap_or(&[]));
     let mut out = [[T::zero(); W]; K];
     for l in 0..W {
         let k = (index.0[l] as usize).min(last);
         for (o, t) in out.iter_mut().zip(&tables) {
-            o[l] = t[k][l];
+            o[l] = t.get(k).map_or(T::zero(), |row| row[l]);
         }
     }
     out.map(Lanes)
