@@ -187,7 +187,17 @@ pub fn delivered_drive(
     periodic: bool,
 ) -> Vec<f64> {
     let output = amplifier_output(spec, sample_rate_hz, drive, periodic);
-    let period_s = 1.0 / sample_rate_hz;
+    inputs_for_outputs(spec, 1.0 / sample_rate_hz, &output, periodic)
+}
+
+/// The drive that makes the amplifier deliver `output` sample by sample ([`input_for_step`]),
+/// each step from the previous output (the last one for a periodic record, else rest at 0 V).
+fn inputs_for_outputs(
+    spec: &AmplifierSpec,
+    period_s: f64,
+    output: &[f64],
+    periodic: bool,
+) -> Vec<f64> {
     let n = output.len();
     (0..n)
         .map(|k| {
@@ -318,18 +328,8 @@ pub fn slew_feasible_drive(
     if projection.violations == 0 {
         return drive.iter().map(|v| v.clamp(limits.0, limits.1)).collect();
     }
-    let u = projection.drive;
-    let n = u.len();
-    (0..n)
-        .map(|k| {
-            let before = if k > 0 {
-                u[k - 1]
-            } else if periodic {
-                u[n - 1]
-            } else {
-                0.0
-            };
-            input_for_step(spec, period_s, before, u[k]).clamp(limits.0, limits.1)
-        })
+    inputs_for_outputs(spec, period_s, &projection.drive, periodic)
+        .into_iter()
+        .map(|v| v.clamp(limits.0, limits.1))
         .collect()
 }
