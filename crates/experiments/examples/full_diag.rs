@@ -353,6 +353,23 @@ fn main() {
                 c.smoothness
             ))
         );
+        if let Some(d) = &study.full.plant.report.dynamics {
+            // The vibration link as fitted: with `seg=1` its segment gain is the hysteresis
+            // and creep links' small-signal gain error on the multisine.
+            let modes: Vec<String> = d
+                .modes
+                .iter()
+                .map(|m| format!("{:.1} Hz zeta {:.4}", m.frequency_hz, m.damping_ratio))
+                .collect();
+            println!(
+                "vibration link: order {:?}, modes [{}], segment gain {:.4}, segment RMS without / with {:.5} / {:.5}",
+                d.order,
+                modes.join(", "),
+                d.segment_gain,
+                d.rms_without,
+                d.rms_with
+            );
+        }
         println!("{}", hystcomp_experiments::beyond::summarize_beyond(&study));
         for s in &study.learning.series {
             let e: Vec<String> = s

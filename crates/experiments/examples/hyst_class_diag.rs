@@ -1,6 +1,7 @@
 //! Which hysteresis model class follows the stage (issue 11): candidates measured on the
 //! creep-, dynamics- and noise-free copy of the built-in stage, diagnosis only.
-//! `cargo run --release -p hystcomp-experiments --example hyst_class_diag [N1,N2,..] [POWER]`:
+//! `cargo run --release -p hystcomp-experiments --example hyst_class_diag [N1,N2,..] [POWER]`
+//! (environment `MAPS=3`: only these output-map degrees, 1 the MPIM alone):
 //! for each operator count (thresholds `(i/n)^POWER`), the MPIM alone and with an output map
 //! `psi(y) = y - e_2 y^2 - ... - e_K y^K` of degree 2-5 (`FitProblem::with_output_map`), plant
 //! and inverse: the fit on the hysteresis excitation, the held-out error on the chain
@@ -205,15 +206,25 @@ fn main() {
         .map(|s| s.split(',').map(|x| x.parse().unwrap()).collect())
         .unwrap_or(vec![10]);
     let power: f64 = args.get(2).map_or(1.0, |s| s.parse().unwrap());
-    let maps = [
-        Map::None,
-        Map::Poly(2),
-        Map::Poly(3),
-        Map::Poly(4),
-        Map::Poly(5),
-    ];
+    // MAPS=3 (degrees, 1: none) restricts the output maps, e.g. to the `full` pipeline's.
+    let maps: Vec<Map> = std::env::var("MAPS")
+        .map(|s| {
+            s.split(',')
+                .map(|d| match d.parse().unwrap() {
+                    1 => Map::None,
+                    k => Map::Poly(k),
+                })
+                .collect()
+        })
+        .unwrap_or(vec![
+            Map::None,
+            Map::Poly(2),
+            Map::Poly(3),
+            Map::Poly(4),
+            Map::Poly(5),
+        ]);
     for &n in &ns {
-        for map in maps {
+        for &map in &maps {
             // plant
             let p = fit(&vv, &yy, n, power, map, Direction::Plant);
             let pred = p.predict(&vh);
@@ -239,7 +250,7 @@ fn main() {
             let m = run(&stage, 2, &u);
             let dihc = 100.0 * rms(&m[half..], &desired[half..]) / dr;
             println!(
-                "n={n:2} p={power} {map:?}: plant fit {:.3} held {:.3} slope {:.2} IHC {:.3} | inverse fit {:.3} held {:.3} slope {:.2} DIHC {:.3}",
+                "n={n:2} p={power} {map:?}: plant fit {:.3} held {:.4} slope {:.2} IHC {:.3} | inverse fit {:.3} held {:.4} slope {:.2} DIHC {:.3}",
                 p.fit_pct, held, p.min_slope, ihc, q.fit_pct, heldv, q.min_slope, dihc
             );
         }
