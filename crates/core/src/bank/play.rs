@@ -388,8 +388,28 @@ impl<'a, T: Real, const W: usize> OperatorRows<'a, T, W> {
     /// operators at either edge (`EDGES`) and summing `b_i w_i` (`SUM`) as
     /// `crate::play::four_way_sum` does for each lane's own operator count (`UNIFORM`: every
     /// lane has them all).
+    ///
+    /// With every lane active (the usual case) the memory rows are written whole
+    /// ([`OperatorRows::update_all`]): a blend of the new memory with the old written back to
+    /// the row it was read from becomes a masked store where the target has one, and AVX2's
+    /// (`vmaskmovps`) costs many plain stores on some processors (AMD's).
     #[inline(always)]
     fn update<const EDGES: bool, const SUM: bool, const UNIFORM: bool>(
+        self,
+        operators: U<W>,
+        x: L<T, W>,
+        active: Mask<T, W>,
+    ) -> Fed<T, W> {
+        if active.all() {
+            self.update_all::<EDGES, SUM, UNIFORM, true>(operators, x, active)
+        } else {
+            self.update_all::<EDGES, SUM, UNIFORM, false>(operators, x, active)
+        }
+    }
+
+    /// [`OperatorRows::update`], knowing (`ALL`) whether every lane is active.
+    #[inline(always)]
+    fn update_all<const EDGES: bool, const SUM: bool, const UNIFORM: bool, const ALL: bool>(
         self,
         operators: U<W>,
         x: L<T, W>,
@@ -410,7 +430,7 @@ impl<'a, T: Real, const W: usize> OperatorRows<'a, T, W> {
         let mut i = 0usize;
         for ((r4, b4), m4) in thresholds.iter().zip(weights).zip(memory.iter_mut()) {
             for j in 0..4 {
-                Self::operator::<EDGES, SUM, UNIFORM>(
+                Self::operator::<EDGES, SUM, UNIFORM, ALL>(
                     &mut acc,
                     i,
                     Some(j),
@@ -426,7 +446,7 @@ impl<'a, T: Real, const W: usize> OperatorRows<'a, T, W> {
             }
         }
         for ((r, b), m) in t_rest.iter().zip(b_rest).zip(m_rest.iter_mut()) {
-            Self::operator::<EDGES, SUM, UNIFORM>(
+            Self::operator::<EDGES, SUM, UNIFORM, ALL>(
                 &mut acc, i, None, *r, *b, m, operators, full, x, active,
             );
             i += 1;
@@ -450,7 +470,7 @@ impl<'a, T: Real, const W: usize> OperatorRows<'a, T, W> {
     /// beyond them.
     #[allow(clippy::too_many_arguments)]
     #[inline(always)]
-    fn operator<const EDGES: bool, const SUM: bool, const UNIFORM: bool>(
+    fn operator<const EDGES: bool, const SUM: bool, const UNIFORM: bool, const ALL: bool>(
         acc: &mut Accumulated<T, W>,
         i: usize,
         group: Option<usize>,
@@ -467,7 +487,11 @@ impl<'a, T: Real, const W: usize> OperatorRows<'a, T, W> {
         let lower = x - r;
         let raised = lower.or_keep(w.lt(lower), w);
         let next = x.or_keep(raised.gt(x), raised);
-        *m = next.or_keep(active, w).0;
+        *m = if ALL {
+            next.0
+        } else {
+            next.or_keep(active, w).0
+        };
         let i32 = i as u32;
         if EDGES {
             let (up, down) = if UNIFORM {

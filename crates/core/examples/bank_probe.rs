@@ -1,0 +1,158 @@
+//! A small probe of one compensator bank's cost per channel-step (issue 16), for instruction
+//! counts under `valgrind --tool=callgrind` and for timing one kernel on one vector path
+//! without building the command-line tool:
+//!
+//! ```text
+//! cargo build --release -p hystcomp-core --example bank_probe
+//! ./target/release/examples/bank_probe KIND PRECISION PATH CHANNELS TICKS REPEATS
+//! ```
+//!
+//! `KIND` is `ihc`, `ihc-delayed`, `ihc-guarded`, `wihc`, `wihc-delayed`, `wihc-guarded` or
+//! `dihc`; `PRECISION` `f32` or `f64`; `PATH` `best`, `baseline`, `avx2` or `avx512` (valgrind
+//! runs no AVX-512: take `avx2` there). The channels are those of `hystcomp bench --channels`
+//! (ten operators, Table 1 or 2 of the paper, each channel's weights scaled by its own factor in
+//! [0.9, 1.1], each its own phase of a three-tone trajectory). Prints the median over `REPEATS`
+//! runs of the thread's CPU time per channel-step (Linux `CLOCK_THREAD_CPUTIME_ID`, else the
+//! wall clock), and a checksum of the controls (the same on every path: the same bits).
+
+use std::hint::black_box;
+
+use hystcomp_core::{
+    CompensatorBank, DihcBank, Heap, IhcBank, Mpim, OutputLimits, Real, SolveMode, VectorPath,
+    WihcBank,
+    paper::{self, PublishedMpim},
+    with_vector_path,
+};
+
+const OPERATORS: usize = 10;
+
+/// `table` spread over [`OPERATORS`] operators, weights scaled by `1 + 0.1 s` for a channel's
+/// own `s` in [-1, 1] (as `hystcomp bench --channels`).
+fn channel_model<T: Real>(table: &PublishedMpim, channel: usize) -> Mpim<T, Vec<T>> {
+    let base: Mpim<T, Vec<T>> = table.spread(OPERATORS).expect("the paper's table");
+    let s = ((channel as f64) * 0.618_034).fract() * 2.0 - 1.0;
+    let scale = T::from_f64(1.0 + 0.1 * s);
+    let weights: Vec<T> = base.weights().iter().map(|&b| b * scale).collect();
+    Mpim::new(base.thresholds(), &weights, base.a1(), base.a2()).expect("scaled weights")
+}
+
+/// `ticks x channels` desired positions (as `hystcomp bench --channels`).
+fn signal<T: Real>(plants: &[Mpim<T, Vec<T>>], ticks: usize) -> Vec<T> {
+    let channels = plants.len();
+    let mut out = vec![T::zero(); ticks * channels];
+    for (c, plant) in plants.iter().enumerate() {
+        let mut p = plant.clone();
+        let phase = c as f64 * 0.37;
+        for k in 0..ticks {
+            let t = k as f64 / ticks as f64 * 4.0;
+            let rise = 0.5 - 0.5 * (std::f64::consts::PI * t.min(1.0)).cos();
+            let v = 0.5
+                + 0.14 * (std::f64::consts::PI * t + 2.6 + phase).sin()
+                + 0.14 * (1.6 * std::f64::consts::PI * t + 3.0 + phase).sin()
+                + 0.2 * (2.0 * std::f64::consts::PI * t + 1.5 + phase).sin();
+            out[k * channels + c] = p.step(T::from_f64(rise * v));
+        }
+    }
+    out
+}
+
+/// `struct timespec` of 64-bit Linux.
+#[cfg(all(target_os = "linux", target_pointer_width = "64"))]
+#[repr(C)]
+struct Timespec {
+    seconds: i64,
+    nanoseconds: i64,
+}
+
+#[cfg(all(target_os = "linux", target_pointer_width = "64"))]
+unsafe extern "C" {
+    fn clock_gettime(clock: i32, time: *mut Timespec) -> i32;
+}
+
+/// The thread's CPU time in ns (Linux `CLOCK_THREAD_CPUTIME_ID`), else the wall clock.
+fn now_ns(start: std::time::Instant) -> f64 {
+    #[cfg(all(target_os = "linux", target_pointer_width = "64"))]
+    {
+        const CLOCK_THREAD_CPUTIME_ID: i32 = 3;
+        let mut time = Timespec {
+            seconds: 0,
+            nanoseconds: 0,
+        };
+        // SAFETY: `time` is a valid `struct timespec` for the call to fill.
+        if unsafe { clock_gettime(CLOCK_THREAD_CPUTIME_ID, &mut time) } == 0 {
+            return time.seconds as f64 * 1e9 + time.nanoseconds as f64;
+        }
+    }
+    start.elapsed().as_nanos() as f64
+}
+
+fn probe<T: Real>(kind: &str, path: VectorPath, channels: usize, ticks: usize, repeats: usize) {
+    let plants: Vec<_> = (0..channels)
+        .map(|c| channel_model::<T>(&paper::TABLE1, c))
+        .collect();
+    let inverses: Vec<_> = (0..channels)
+        .map(|c| channel_model::<T>(&paper::TABLE2, c))
+        .collect();
+    let desired = signal(&plants, ticks);
+    let mut control = vec![T::zero(); desired.len()];
+    let limits = [OutputLimits::new(T::zero(), T::one()).expect("0 < 1")];
+    let mode = |m: &str| match m {
+        "delayed" => SolveMode::DelayedAllowUnstable,
+        "guarded" => SolveMode::DelayedGuarded,
+        _ => SolveMode::Exact,
+    };
+    let mut bank: Box<dyn CompensatorBank<T>> = match kind.split_once('-') {
+        Some(("ihc", m)) => Box::new(IhcBank::<T, Heap>::new(&plants, &limits, mode(m)).unwrap()),
+        Some(("wihc", m)) => Box::new(WihcBank::<T, Heap>::new(&plants, &limits, mode(m)).unwrap()),
+        None if kind == "ihc" => {
+            Box::new(IhcBank::<T, Heap>::new(&plants, &limits, SolveMode::Exact).unwrap())
+        }
+        None if kind == "wihc" => {
+            Box::new(WihcBank::<T, Heap>::new(&plants, &limits, SolveMode::Exact).unwrap())
+        }
+        None if kind == "dihc" => Box::new(
+            DihcBank::<T, Heap>::new(&inverses, &[(T::zero(), T::one())], &limits).unwrap(),
+        ),
+        _ => panic!("unknown kind {kind}"),
+    };
+    let start = std::time::Instant::now();
+    let mut times = Vec::with_capacity(repeats);
+    with_vector_path(path, || {
+        for _ in 0..repeats {
+            let t0 = now_ns(start);
+            bank.reset();
+            bank.process(black_box(&desired), &mut control).unwrap();
+            times.push((now_ns(start) - t0) / (ticks * channels) as f64);
+        }
+    });
+    times.sort_by(f64::total_cmp);
+    let checksum = control
+        .iter()
+        .fold(0u64, |h, c| h.rotate_left(5) ^ Real::to_f64(*c).to_bits());
+    println!(
+        "{kind} {path:?} {channels} ch: median {:.2} ns, min {:.2} ns per channel-step; checksum {checksum:016x}",
+        times[times.len() / 2],
+        times[0]
+    );
+}
+
+fn main() {
+    let args: Vec<String> = std::env::args().collect();
+    let arg = |i: usize, default: &str| args.get(i).cloned().unwrap_or_else(|| default.into());
+    let kind = arg(1, "ihc");
+    let precision = arg(2, "f32");
+    let path = match arg(3, "best").as_str() {
+        "baseline" => VectorPath::Baseline,
+        "avx2" => VectorPath::Avx2,
+        "avx512" => VectorPath::Avx512,
+        _ => VectorPath::Best,
+    };
+    let channels: usize = arg(4, "4096").parse().expect("channels");
+    let ticks: usize = arg(5, "200").parse().expect("ticks");
+    let repeats: usize = arg(6, "5").parse().expect("repeats");
+    if precision == "f64" {
+        probe::<f64>(&kind, path, channels, ticks, repeats.max(1));
+    } else {
+        probe::<f32>(&kind, path, channels, ticks, repeats.max(1));
+    }
+}
