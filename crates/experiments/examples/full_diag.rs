@@ -6,7 +6,7 @@
 //! bank; `holds=1` and `auto=1`: weights on the holds, smoothness chosen; `ops`, `iops`, `oe`,
 //! `res`, `delay`; the excitation's `hold`, `hold2`, `step`, `rest`, `vibamp`, `vibs`).
 //! Environment: `JOINT=1` the joint creep fit; `STUDY=1` runs the whole study and prints issue
-//! 11's summary (`SEED=s`: the study's seed; `STRONG=1`: on the stage with ten times the amplifier's slew rate; `SLEWLEARN=1`: the learning study's drive slew-projected, `StudyOptions::slew_aware_learning`); `FLOOR=1` identifies hysteresis-only MPIMs on the creep-, dynamics- and
+//! 11's summary (`SEED=s`: the study's seed; `STRONG=1`: on the stage with ten times the amplifier's slew rate; `SLEWLEARN=1`: the learning study's drive slew-projected, `StudyOptions::slew_aware_learning`; `FEASSTART=1`: its series start from the slew-constrained drive, `StudyOptions::feasible_learning_start`); `FLOOR=1` identifies hysteresis-only MPIMs on the creep-, dynamics- and
 //! noise-free copy (`POWER=p`: thresholds `(i/n)^p`) and writes its n = 10 model to
 //! `/tmp/creep-mpim-stage.json`, which `STAGEHYST=mpim` then makes the stage's hysteresis;
 //! `STAGECREEP=off|log100|log1000|kv` changes the diagnostic stage's creep law; `DUMP=run`
@@ -329,6 +329,9 @@ fn main() {
                 ..options.clone()
             },
             slew_aware_learning: std::env::var("SLEWLEARN").as_deref() == Ok("1"),
+            // FEASSTART=1: the learning study's series start from the slew-constrained drive
+            // where the faithful one asks more than the slew rate.
+            feasible_learning_start: std::env::var("FEASSTART").as_deref() == Ok("1"),
             ..Default::default()
         };
         // SEED=s: the study's seed (1 by default).

@@ -147,6 +147,43 @@ pub fn raster_period(sample_rate_hz: f64) -> Result<Vec<f64>, StudyError> {
     .map_err(|e| StudyError::Option(format!("the learning study's raster: {e}")))
 }
 
+/// The slew-constrained starting drive of a series (one period, model voltage unit), or `None`
+/// where the learner's own start is kept: the speed study's drive ([`crate::slew_drive`],
+/// every step within `max_step`) for `periods` repetitions of `desired` as a trial plays them
+/// from rest, used only where the speed study would use it (a model with a vibration link whose
+/// faithful drive over those periods has a step beyond `max_step`). The drive is the record's
+/// last period (the one a trial measures), made slew-feasible around the period's wrap as well
+/// (`hystcomp_learn::slew::project_slew`, periodic), within `limits`.
+pub fn feasible_start(
+    model: &ModelFile,
+    desired: &[f64],
+    periods: usize,
+    limits: (f64, f64),
+    max_step: f64,
+) -> Result<Option<Vec<f64>>, String> {
+    if model.vibration.is_none() {
+        return Ok(None);
+    }
+    let n = desired.len();
+    let repeated: Vec<f64> = (0..periods.max(1))
+        .flat_map(|_| desired.iter().copied())
+        .collect();
+    let drive = crate::slew_drive::slew_constrained_drive(
+        model,
+        hystcomp_io::compensator::Method::Ihc,
+        limits,
+        &repeated,
+        max_step,
+    )?;
+    if !drive.constrained {
+        return Ok(None);
+    }
+    let last = &drive.drive[drive.drive.len() - n..];
+    Ok(Some(
+        hystcomp_learn::slew::project_slew(last, max_step, limits, true).drive,
+    ))
+}
+
 fn learn(
     stage: &StageConfig,
     seed: u64,
@@ -154,6 +191,7 @@ fn learn(
     (label, model): (&str, &ModelFile),
     desired: &[f64],
     max_drive_step: Option<f64>,
+    start_step: Option<f64>,
 ) -> Result<LearningSeries, StudyError> {
     let (trials, periods, bins) = if trajectory == PAPER {
         (PAPER_TRIALS, PAPER_PERIODS_PER_TRIAL, PAPER_MHE_BINS)
@@ -166,7 +204,13 @@ fn learn(
     let mut options = LearningOptions::new(stage.sample_rate_hz);
     options.mhe_bins = bins;
     options.max_drive_step = max_drive_step;
-    let mut learner = Learner::new(model, desired, options).map_err(|e| failed(&e))?;
+    let mut learner = Learner::new(model, desired, options.clone()).map_err(|e| failed(&e))?;
+    if let Some(step) = start_step
+        && let Some(start) = feasible_start(model, desired, periods, learner.law().limits, step)
+            .map_err(|e| failed(&e))?
+    {
+        learner = Learner::resume(model, desired, &start, options).map_err(|e| failed(&e))?;
+    }
     let played = run_trials(stage, seed, &mut learner, trials, periods, &mut |_| {})
         .map_err(|e| failed(&e))?;
     Ok(LearningSeries {
@@ -243,13 +287,16 @@ pub fn learning_checks(series: &[LearningSeries]) -> Vec<AcceptanceCheck> {
 /// Runs the learning study on `stage` (see the [module documentation](self)): the paper's
 /// trajectory and the raster, each learned from the `exact` and the `full` plant model's IHC,
 /// the four series in parallel; with `max_drive_step` (command volts per sample) every
-/// trial's drive is kept within it (`hystcomp_learn::slew`).
+/// trial's drive is kept within it (`hystcomp_learn::slew`); with `start_step` (command volts
+/// per sample) a series whose faithful drive asks a larger step starts from the
+/// slew-constrained drive instead ([`feasible_start`]).
 pub(crate) fn run_learning(
     stage: &StageConfig,
     seed: u64,
     exact: &ModelFile,
     full: &ModelFile,
     max_drive_step: Option<f64>,
+    start_step: Option<f64>,
 ) -> Result<LearningStudy, StudyError> {
     let fs = stage.sample_rate_hz;
     let paper = Signal::paper(1.0, crate::Reference::paper().trajectory.period_s, fs)
@@ -265,7 +312,15 @@ pub(crate) fn run_learning(
     let series: Vec<LearningSeries> = jobs
         .par_iter()
         .map(|(trajectory, start, desired)| {
-            learn(stage, seed, trajectory, *start, desired, max_drive_step)
+            learn(
+                stage,
+                seed,
+                trajectory,
+                *start,
+                desired,
+                max_drive_step,
+                start_step,
+            )
         })
         .collect::<Result<_, _>>()?;
     Ok(LearningStudy {
@@ -347,6 +402,88 @@ mod tests {
                 })
                 .collect(),
             stopped: false,
+        }
+    }
+
+    /// One period of a rounded triangle raster (`rate` Hz at 10 kHz).
+    fn raster_at(rate: f64, amplitude: f64, offset: f64) -> Vec<f64> {
+        Signal {
+            shape: Shape::Raster(Raster::triangle(rate, 0.05)),
+            amplitude,
+            offset,
+            duration_s: 1.0 / rate,
+            speed: 1.0,
+            sample_rate_hz: 10_000.0,
+        }
+        .sample()
+        .unwrap()
+    }
+
+    /// The largest step of the faithful IHC drive over `periods` repetitions from rest.
+    fn faithful_peak_step(model: &ModelFile, desired: &[f64], periods: usize) -> f64 {
+        let repeated: Vec<f64> = (0..periods).flat_map(|_| desired.iter().copied()).collect();
+        let mut c = hystcomp_io::compensator::ScaledCompensator::new(
+            model,
+            hystcomp_io::compensator::Method::Ihc,
+            Some((0.0, 10.0)),
+        )
+        .unwrap();
+        let mut v = vec![0.0; repeated.len()];
+        c.process(&repeated, &mut v).unwrap();
+        v.windows(2)
+            .map(|w| (w[1] - w[0]).abs())
+            .fold(0.0, f64::max)
+    }
+
+    #[test]
+    fn a_feasible_start_is_kept_only_where_the_faithful_drive_is_infeasible() {
+        let model = crate::slew_drive::tests::chain();
+        let limits = (0.0, 10.0);
+        let mut options = LearningOptions::new(10_000.0);
+        options.mhe_bins = 5;
+        options.limits = Some(limits);
+        for (rate, amplitude, offset, periods) in [
+            (100.0, 10.0, 37.5, 4),
+            (130.0, 6.0, 30.0, 3),
+            (80.0, 12.0, 40.0, 2),
+        ] {
+            let desired = raster_at(rate, amplitude, offset);
+            let n = desired.len();
+            let peak = faithful_peak_step(&model, &desired, periods);
+            // Feasible faithful drive, or no vibration link: the learner's own start.
+            assert_eq!(
+                feasible_start(&model, &desired, periods, limits, 1.5 * peak).unwrap(),
+                None
+            );
+            let plain =
+                ModelFile::load(std::path::Path::new("../../models/table1-plant.json")).unwrap();
+            assert_eq!(
+                feasible_start(&plain, &desired, periods, limits, 0.5 * peak).unwrap(),
+                None
+            );
+            // Infeasible: a period whose every step, the wrap included, is within the bound.
+            let step = 0.6 * peak;
+            let start = feasible_start(&model, &desired, periods, limits, step)
+                .unwrap()
+                .expect("the faithful drive is infeasible");
+            assert_eq!(start.len(), n);
+            assert!(
+                start
+                    .iter()
+                    .all(|v| v.is_finite() && (0.0..=10.0).contains(v))
+            );
+            for k in 0..n {
+                let d = start[(k + 1) % n] - start[k];
+                assert!(
+                    d.abs() <= step * (1.0 + 1e-9),
+                    "{rate} Hz, sample {k}: {d} > {step}"
+                );
+            }
+            // The learner resumed from it plays it as trial 0, and its reference is the model's
+            // response to it.
+            let learner = Learner::resume(&model, &desired, &start, options.clone()).unwrap();
+            assert_eq!(learner.drive(), &start[..]);
+            assert!(learner.reference().iter().all(|r| r.is_finite()));
         }
     }
 

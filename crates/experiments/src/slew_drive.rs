@@ -293,7 +293,7 @@ pub fn slew_constrained_drive(
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
     use crate::signals::{Raster, Shape, Signal};
     use hystcomp_io::model_file::VibrationPart;
@@ -302,7 +302,7 @@ mod tests {
 
     /// Table 1's MPIM with a lightly damped 800 Hz mode (zero-order-hold sampled, unit static
     /// gain) and a one-sample delay.
-    fn chain() -> ModelFile {
+    pub(crate) fn chain() -> ModelFile {
         let base = ModelFile::load(std::path::Path::new("../../models/table1-plant.json")).unwrap();
         let (f, zeta): (f64, f64) = (800.0, 0.03);
         let w = 2.0 * std::f64::consts::PI * f;

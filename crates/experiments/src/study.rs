@@ -80,6 +80,12 @@ pub struct StudyOptions {
     /// (the speed study's margin of the slew rate) and the reference learned from the
     /// projected drive (`hystcomp_learn::slew`, constrained ILC). Off by default.
     pub slew_aware_learning: bool,
+    /// A learning series whose faithful starting drive asks more than the amplifier's slew
+    /// rate starts from the speed study's slew-constrained drive instead
+    /// ([`crate::learning_study::feasible_start`], steps within
+    /// [`crate::speed::max_drive_step_v`]): trial 0 is the best feasible feedforward, not the
+    /// infeasible faithful inverse. Off by default.
+    pub feasible_learning_start: bool,
 }
 
 impl Default for StudyOptions {
@@ -99,6 +105,7 @@ impl Default for StudyOptions {
             mhe_bins: DEFAULT_MHE_BINS,
             full: FullOptions::default(),
             slew_aware_learning: false,
+            feasible_learning_start: false,
         }
     }
 }
@@ -907,6 +914,9 @@ pub fn run_study(
         &full_plant.model,
         options
             .slew_aware_learning
+            .then(|| crate::speed::max_drive_step_v(&options.stage)),
+        options
+            .feasible_learning_start
             .then(|| crate::speed::max_drive_step_v(&options.stage)),
     )?;
     observer.end();
