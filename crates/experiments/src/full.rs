@@ -74,30 +74,32 @@ pub struct FullOptions {
 pub const OUTPUT_MAP_DEGREE: usize = 3;
 
 /// The exponent of the `full` pipeline's threshold spacing (see
-/// [`FullOptions::threshold_exponent`]): 1, the paper's uniform thresholds.
+/// [`FullOptions::threshold_exponent`]): 1.75, thresholds crowded towards zero, with
+/// [`OPERATORS`] play operators in both chains.
 ///
 /// A minor loop of amplitude `a` (normalised) is shaped only by the play operators with
 /// `2 r_i < a`: with ten uniform thresholds, the speed study's 20 um raster (0.27 of the
 /// range) sees two of them, and its static error is the model's minor-loop error (measured by
 /// `examples/minor_loop_diag.rs`, seed 1, 10 Hz, rigid quiet copy: 0.525 % of the scan, of
-/// which 0.448 the loop's mean, hung from its top reversal at the wrong width). Thresholds
-/// crowded towards zero, `((i-1)/n)^1.5`, halve it (0.257 %) and meet every issue 11 target
-/// (100 Hz raster 0.462 % built-in, 0.446 % with 10x slew; 20 s 0.068 / 0.083 %) and are
-/// preferred by held-out error on the clean copy (`examples/hyst_class_diag.rs`: plant 0.078
-/// -> 0.066 %, inverse 0.224 -> 0.099 %), but their inverse asks larger drive steps at the
-/// raster's corners and the learning study's raster (issue 12, on the built-in amplifier)
-/// then has 13-16 % of its samples slew-limited (3-6 % with 1) and its best of 20 trials goes
-/// 0.057 -> 0.120 % (bound 0.1), so the default stays 1 (README, `full` pipeline).
+/// which 0.448 the loop's mean, hung from its top reversal at the wrong width).
 ///
-/// Chosen jointly with the operator count by the rule fixed beforehand (least plant-chain
-/// held-out error on the clean copy over 10, 12, 15, 20 operators and p = 1 to 2), the
-/// pipeline would take 12 operators at p = 1.75: the 100 Hz raster then meets 0.5 % on the
-/// built-in amplifier (0.444 %), but the learning raster goes to 0.135 %. Crowded thresholds
-/// do fix the hysteresis link's small-signal gain on the vibration segment (0.89 -> 1.00-1.02)
-/// and with it the vibration fit; today's learning figure rests on that gain error, which
-/// makes the vibration inverse ask less at the raster's corners than the amplifier's slew
-/// (README, the raster bullet's grid).
-pub const THRESHOLD_EXPONENT: f64 = 1.0;
+/// Chosen jointly with the operator count by a rule fixed before looking at the raster (least
+/// plant-chain held-out error on the creep-, dynamics- and noise-free copy,
+/// `examples/hyst_class_diag.rs`, over 10, 12, 15, 20 operators and p = 1 to 2; the simplest
+/// point within 1 % of the least): 12 operators at p = 1.75 (0.0549 %; 10 at 1.75 0.0558 %).
+/// Crowded thresholds fix the hysteresis link's small-signal gain on the vibration segment
+/// (0.89 -> 1.00) and with it the vibration fit, and the 100 Hz raster meets 0.5 % on the
+/// built-in amplifier (0.444 %, against 0.774 % with ten uniform thresholds). The correct
+/// vibration inverse of that raster asks more than the amplifier's slew at its corners, and
+/// the learning study's raster, started from the faithful drive, then crawls (best of 20
+/// trials 0.135 %, issue 12: 0.1); started from the slew-constrained drive
+/// (`StudyOptions::feasible_learning_start`, on by default) it reaches 0.080 % (seeds 1-3:
+/// 0.080-0.083 %). README, `full` pipeline (the raster bullet's grid) and learning sections.
+pub const THRESHOLD_EXPONENT: f64 = 1.75;
+
+/// The `full` pipeline's play operators in each chain (see [`THRESHOLD_EXPONENT`] for how
+/// they were chosen with the spacing).
+pub const OPERATORS: usize = 12;
 
 /// The default smoothness penalty on the `full` pipeline's creep weights
 /// (`hystcomp_identify::FitProblem::with_extra_smoothness`) when they are fitted jointly
@@ -125,9 +127,9 @@ impl Default for FullOptions {
     /// weights are smoothed (Tikhonov), which pulls the weights towards the flat spectrum of
     /// logarithmic creep where the holds cannot tell neighbouring time constants apart; the
     /// penalty is chosen among [`HOLD_SMOOTHNESS_CANDIDATES`] by leaving each hold out. The
-    /// paper's ten operators stay, in both chains: 20 or 40 fit the record better but track
-    /// worse, and uniform 12-20 bend the vibration fit (an extra pole); with crowded
-    /// thresholds 12 predict held-out data best (see [`THRESHOLD_EXPONENT`]).
+    /// chains have [`OPERATORS`] operators at the spacing [`THRESHOLD_EXPONENT`] (chosen
+    /// jointly by held-out error; uniform 12-20 bend the vibration fit with an extra pole, 20
+    /// or 40 fit the record better but track worse).
     fn default() -> Self {
         FullOptions {
             creep: CreepOptions::log_spaced(0.01, 100.0, 2)
@@ -137,8 +139,8 @@ impl Default for FullOptions {
             dynamics: DynamicsOptions::default(),
             excitation: ChainExcitation::default(),
             output_error_iterations: 0,
-            operators: 10,
-            inverse_operators: 10,
+            operators: OPERATORS,
+            inverse_operators: OPERATORS,
             threshold_exponent: THRESHOLD_EXPONENT,
             output_map_degree: OUTPUT_MAP_DEGREE,
             inverse_band_hz: None,

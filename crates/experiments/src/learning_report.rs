@@ -46,7 +46,8 @@ pub(crate) fn learning_section(
              follows from each measured trial, r_k+1 = sat(r_k + Q[gamma z^m e_k]) (learning \
              through the inverse hysteresis model, Leang & Devasia 2006, \
              doi:10.1016/j.mechatronics.2005.11.006; Q a zero-phase low-pass, Longman 2000, \
-             doi:10.1080/002071700405905). Trial 0 is the compensator's own drive; every trial \
+             doi:10.1080/002071700405905). Trial 0 is the compensator's own drive (where the \
+             amplifier cannot slew it, the speed study's slew-constrained drive); every trial \
              starts from a fresh stage at rest with its own sensor-noise seed, so the noise \
              does not repeat and is not learned. The law runs with its defaults, the same for \
              every motion: nothing here is tuned."

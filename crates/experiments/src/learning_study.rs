@@ -57,7 +57,7 @@ pub const RASTER: &str = "raster 100 Hz";
 /// One trial of a series.
 #[derive(Debug, Clone, Serialize)]
 pub struct LearningPoint {
-    /// The trial (0: the compensator's own drive).
+    /// The trial (0: the compensator's own drive, or the slew-constrained one).
     pub trial: usize,
     /// Its indices over the measured period, % of the desired range.
     pub indices: TrackingIndices,
@@ -80,6 +80,9 @@ pub struct LearningSeries {
     pub trials: Vec<LearningPoint>,
     /// Whether the divergence guard stopped the learning.
     pub stopped: bool,
+    /// Whether trial 0 is the slew-constrained drive ([`feasible_start`]) rather than the
+    /// compensator's own.
+    pub slew_constrained_start: bool,
 }
 
 impl LearningSeries {
@@ -205,11 +208,13 @@ fn learn(
     options.mhe_bins = bins;
     options.max_drive_step = max_drive_step;
     let mut learner = Learner::new(model, desired, options.clone()).map_err(|e| failed(&e))?;
+    let mut slew_constrained_start = false;
     if let Some(step) = start_step
         && let Some(start) = feasible_start(model, desired, periods, learner.law().limits, step)
             .map_err(|e| failed(&e))?
     {
         learner = Learner::resume(model, desired, &start, options).map_err(|e| failed(&e))?;
+        slew_constrained_start = true;
     }
     let played = run_trials(stage, seed, &mut learner, trials, periods, &mut |_| {})
         .map_err(|e| failed(&e))?;
@@ -218,6 +223,7 @@ fn learn(
         start: label.into(),
         law: learner.law().clone(),
         stopped: learner.is_stopped(),
+        slew_constrained_start,
         trials: played
             .iter()
             .map(|t| LearningPoint {
@@ -338,7 +344,8 @@ impl std::fmt::Display for LearningStudy {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         writeln!(
             f,
-            "learning from repetition: e_rms % by trial (trial 0: the compensator's own drive; \
+            "learning from repetition: e_rms % by trial (trial 0: the compensator's own drive, \
+             or the slew-constrained one where marked; \
              last: the noise floor, % at the amplifier's limits):"
         )?;
         for s in &self.series {
@@ -356,6 +363,9 @@ impl std::fmt::Display for LearningStudy {
             }
             if s.stopped {
                 write!(f, "  STOPPED by the divergence guard")?;
+            }
+            if s.slew_constrained_start {
+                write!(f, "  (slew-constrained start)")?;
             }
             writeln!(f)?;
         }
@@ -402,6 +412,7 @@ mod tests {
                 })
                 .collect(),
             stopped: false,
+            slew_constrained_start: false,
         }
     }
 

@@ -84,7 +84,9 @@ pub struct StudyOptions {
     /// rate starts from the speed study's slew-constrained drive instead
     /// ([`crate::learning_study::feasible_start`], steps within
     /// [`crate::speed::max_drive_step_v`]): trial 0 is the best feasible feedforward, not the
-    /// infeasible faithful inverse. Off by default.
+    /// infeasible faithful inverse. On by default: with the `full` pipeline's crowded
+    /// thresholds the learning raster's best of 20 trials is 0.080 % from it and 0.135 % from
+    /// the faithful drive (issue 12: 0.1; README, learning from repetition).
     pub feasible_learning_start: bool,
 }
 
@@ -105,7 +107,7 @@ impl Default for StudyOptions {
             mhe_bins: DEFAULT_MHE_BINS,
             full: FullOptions::default(),
             slew_aware_learning: false,
-            feasible_learning_start: false,
+            feasible_learning_start: true,
         }
     }
 }
