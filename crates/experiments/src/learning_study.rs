@@ -209,11 +209,14 @@ fn learn(
     options.max_drive_step = max_drive_step;
     let mut learner = Learner::new(model, desired, options.clone()).map_err(|e| failed(&e))?;
     let mut slew_constrained_start = false;
+    // A programme the solver could not finish (or a start the learner refuses) leaves the
+    // learner's own start, as the speed study keeps the faithful drive: the series then
+    // reports no slew-constrained start.
     if let Some(step) = start_step
-        && let Some(start) = feasible_start(model, desired, periods, learner.law().limits, step)
-            .map_err(|e| failed(&e))?
+        && let Ok(Some(start)) = feasible_start(model, desired, periods, learner.law().limits, step)
+        && let Ok(resumed) = Learner::resume(model, desired, &start, options)
     {
-        learner = Learner::resume(model, desired, &start, options).map_err(|e| failed(&e))?;
+        learner = resumed;
         slew_constrained_start = true;
     }
     let played = run_trials(stage, seed, &mut learner, trials, periods, &mut |_| {})
