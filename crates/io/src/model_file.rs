@@ -82,6 +82,22 @@ pub const READABLE_VERSIONS: [u32; 2] = [1, 2];
 /// The most creep elements a file may hold (the core's limit).
 pub const MAX_CREEP_ELEMENTS: usize = hystcomp_core::MAX_CREEP_ELEMENTS;
 
+/// The largest magnitude of an output map coefficient `m_j` (`1e6`). The map acts on the
+/// normalised output (about `[0, 1]`), where identified maps have coefficients of order 1 to
+/// 100; beyond this a coefficient is a unit mistake, not a model.
+pub const MAX_OUTPUT_MAP_COEFFICIENT: f64 = 1e6;
+
+/// The largest magnitude of either end of an output map's `range` (`1e3` normalised units:
+/// a thousand times the model's identified output span).
+pub const MAX_OUTPUT_MAP_RANGE: f64 = 1e3;
+
+/// The smallest and largest slope an output map may have at either end of its range (where it
+/// continues linearly) and on average over it (`1e-9` to `1e6`; identified maps have slopes
+/// near 1, at least identification's `--margin`): the model's output is `psi^-1` of the
+/// MPIM's, so a flatter map multiplies every output beyond its range (up to overflow), and a
+/// steeper one squeezes the whole stroke into nothing.
+pub const OUTPUT_MAP_SLOPE_RANGE: [f64; 2] = [1e-9, 1e6];
+
 /// The hysteresis link's output map (format version 2, optional): the MPIM's output equals
 /// `psi(w) = m_0 + m_1 w + ... + m_K w^K` of the model's normalised output
 /// `w = (output - output.offset) / output.scale` on `range` (continued linearly beyond it), so
@@ -92,9 +108,11 @@ pub const MAX_CREEP_ELEMENTS: usize = hystcomp_core::MAX_CREEP_ELEMENTS;
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct OutputMapPart {
-    /// `[m_0, m_1, ..., m_K]`, 2 to 6 of them.
+    /// `[m_0, m_1, ..., m_K]`, 2 to 6 of them, each at most [`MAX_OUTPUT_MAP_COEFFICIENT`] in
+    /// magnitude.
     pub coefficients: Vec<f64>,
-    /// The normalised outputs `[lo, hi]` on which `psi` is the polynomial, strictly increasing.
+    /// The normalised outputs `[lo, hi]` on which `psi` is the polynomial, strictly increasing,
+    /// each at most [`MAX_OUTPUT_MAP_RANGE`] in magnitude.
     pub range: [f64; 2],
 }
 
@@ -102,6 +120,76 @@ impl OutputMapPart {
     /// The core's map (validated: strictly increasing on its range).
     pub fn map(&self) -> Result<OutputMap<f64>, CoreError> {
         OutputMap::new(&self.coefficients, self.range[0], self.range[1])
+    }
+
+    /// The map, checked as a model file's: the number of coefficients, each finite and within
+    /// [`MAX_OUTPUT_MAP_COEFFICIENT`], the range finite, increasing and within
+    /// [`MAX_OUTPUT_MAP_RANGE`], rising on it ([`OutputMapPart::map`]), and its slopes at the
+    /// range's ends and on average within [`OUTPUT_MAP_SLOPE_RANGE`]. The message names the
+    /// field.
+    pub fn checked(&self) -> Result<OutputMap<f64>, String> {
+        let count = self.coefficients.len();
+        let most = hystcomp_core::MAX_OUTPUT_MAP_DEGREE + 1;
+        if !(2..=most).contains(&count) {
+            return Err(format!(
+                "output_map.coefficients holds {count} coefficients: give 2 to {most} \
+                 ([m_0, m_1, ..., m_K], degree K from 1 to {})",
+                most - 1
+            ));
+        }
+        if let Some((j, m)) = self
+            .coefficients
+            .iter()
+            .enumerate()
+            .find(|(_, m)| !(m.is_finite() && m.abs() <= MAX_OUTPUT_MAP_COEFFICIENT))
+        {
+            return Err(format!(
+                "output_map.coefficients[{j}] = {m:e} must be finite and at most \
+                 {MAX_OUTPUT_MAP_COEFFICIENT:e} in magnitude (the map acts on the normalised \
+                 output, about 0 to 1)"
+            ));
+        }
+        let [lo, hi] = self.range;
+        if !(lo.is_finite()
+            && hi.is_finite()
+            && lo < hi
+            && lo.abs() <= MAX_OUTPUT_MAP_RANGE
+            && hi.abs() <= MAX_OUTPUT_MAP_RANGE)
+        {
+            return Err(format!(
+                "output_map.range [{lo:e}, {hi:e}] must be finite and increasing, each end at \
+                 most {MAX_OUTPUT_MAP_RANGE:e} in magnitude (normalised output)"
+            ));
+        }
+        let map = self.map().map_err(|e| format!("output_map: {e}"))?;
+        // psi continues linearly beyond the range, so these differences are its end slopes.
+        let width = hi - lo;
+        let slopes = [
+            (
+                "at the range's low end",
+                (map.apply(lo) - map.apply(lo - width)) / width,
+            ),
+            (
+                "at the range's high end",
+                (map.apply(hi + width) - map.apply(hi)) / width,
+            ),
+            (
+                "on average over the range",
+                (map.apply(hi) - map.apply(lo)) / width,
+            ),
+        ];
+        let [least, most] = OUTPUT_MAP_SLOPE_RANGE;
+        if let Some((where_, slope)) = slopes
+            .iter()
+            .find(|(_, slope)| !(*slope >= least && *slope <= most))
+        {
+            return Err(format!(
+                "output_map: its slope {where_} is {slope:e}, outside [{least:e}, {most:e}]: \
+                 the model's output is psi^-1 of the MPIM's, so such a map overflows or \
+                 flattens every output; re-identify the model (with a larger --margin)"
+            ));
+        }
+        Ok(map)
     }
 }
 
@@ -492,7 +580,8 @@ impl ModelFile {
     /// operators (at most [`MAX_OPERATORS`]) and the MPIM parameters (see [`Mpim::new`]). Invertibility is
     /// checked where the model is used (a compensator), with the limits it is used with.
     /// With creep or vibration: version 2, a positive finite `sample_rate_hz`, and links the
-    /// core accepts (`hystcomp_core::Creep::new`, `hystcomp_core::Vibration::new`).
+    /// core accepts (`hystcomp_core::Creep::new`, `hystcomp_core::Vibration::new`). With an
+    /// output map: version 2 and [`OutputMapPart::checked`].
     pub fn validate(&self) -> Result<(), ModelFileError> {
         if !READABLE_VERSIONS.contains(&self.format_version) {
             return Err(ModelFileError::UnknownVersion {
@@ -570,9 +659,8 @@ impl ModelFile {
                     message: "output_map needs format_version 2".to_owned(),
                 });
             }
-            map.map().map_err(|e| ModelFileError::Invalid {
-                message: format!("output_map: {e}"),
-            })?;
+            map.checked()
+                .map_err(|message| ModelFileError::Invalid { message })?;
         }
         self.model()?;
         Ok(())

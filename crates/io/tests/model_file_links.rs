@@ -267,3 +267,122 @@ fn the_band_limited_inversion_inverts_the_trajectory_low_passed_and_nothing_else
     let x = vec![1.0, 2.0, 30.0, 2.0];
     assert_eq!(plain.band_limited(&x), x);
 }
+
+/// Table 1 with the output map `coefficients` on `range` (format version 2), as JSON text.
+fn with_map(coefficients: &[f64], range: [f64; 2]) -> String {
+    let mut value: serde_json::Value = serde_json::from_str(&table1().to_json()).unwrap();
+    value["output_map"] = serde_json::json!({ "coefficients": coefficients, "range": range });
+    value.to_string()
+}
+
+#[test]
+fn output_maps_out_of_range_are_refused_naming_the_field() {
+    // A map as `identify --output-map-degree 5` fits on the real record: accepted.
+    let fitted = [-0.00295, 0.7295, -5.771, 19.32, -23.32, 9.406];
+    let file = ModelFile::from_json(&with_map(&fitted, [-0.121, 1.079])).unwrap();
+    assert!(file.output_map.is_some());
+    for (coefficients, range, fragments) in [
+        (
+            &[0.5][..],
+            [0.0, 1.0],
+            &["output_map.coefficients", "2 to 6"][..],
+        ),
+        (
+            &[0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 0.0][..],
+            [0.0, 1.0],
+            &["output_map.coefficients", "2 to 6"],
+        ),
+        (
+            &[0.0, 2e6][..],
+            [0.0, 1.0],
+            &["output_map.coefficients[1]", "1e6"],
+        ),
+        (&[0.0, 1.0][..], [-2e3, 1.0], &["output_map.range", "1e3"]),
+        (
+            &[0.0, 1.0][..],
+            [1.0, 0.0],
+            &["output_map.range", "increasing"],
+        ),
+        // Rising, but so flat that psi^-1 of an ordinary output overflows (1e-300: predict
+        // gave 3.6e299 um before the check).
+        (
+            &[0.0, 1e-300][..],
+            [0.0, 1.0],
+            &["output_map", "slope", "1e-300"],
+        ),
+        // Rising and of ordinary size on average, but flat at its high end (2e-10), where it
+        // continues linearly.
+        (
+            &[0.0, 1.0, -0.4999999999][..],
+            [0.0, 1.0],
+            &["output_map", "slope", "high end"],
+        ),
+        // Steep: the whole stroke squeezed into a millionth of the MPIM's output.
+        (
+            &[0.0, 1.0, 0.0, 0.0, 0.0, 3e5][..],
+            [0.0, 1.0],
+            &["output_map", "slope"],
+        ),
+    ] {
+        let message = ModelFile::from_json(&with_map(coefficients, range))
+            .unwrap_err()
+            .to_string();
+        for fragment in fragments {
+            assert!(
+                message.contains(fragment),
+                "{coefficients:?} {range:?}: {message}"
+            );
+        }
+    }
+}
+
+#[test]
+fn every_accepted_output_map_predicts_finite_outputs_far_beyond_its_range() {
+    // Seeded random maps of every degree, of every size; those the file accepts must give a
+    // finite prediction of ordinary size for inputs far outside the identified range (the
+    // continuation's slopes bounded), and a refused one must name the output map.
+    let mut state = 0x2545_f491_4f6c_dd1d_u64;
+    let mut uniform = move || {
+        state ^= state << 13;
+        state ^= state >> 7;
+        state ^= state << 17;
+        (state >> 11) as f64 / (1u64 << 53) as f64
+    };
+    let (mut accepted, mut refused) = (0, 0);
+    for _ in 0..400 {
+        let degree = 1 + (uniform() * 5.0) as usize;
+        // Half of ordinary size, half anywhere a JSON number may be.
+        let size = if uniform() < 0.5 {
+            10f64.powf(-8.0 + 16.0 * uniform())
+        } else {
+            10f64.powf(-300.0 + 600.0 * uniform())
+        };
+        let mut coefficients: Vec<f64> = (0..=degree)
+            .map(|_| size * (2.0 * uniform() - 1.0))
+            .collect();
+        coefficients[1] = coefficients[1].abs();
+        let lo = 10f64.powf(-3.0 + 6.5 * uniform()) * (uniform() - 0.5);
+        let hi = lo + 10f64.powf(-3.0 + 6.0 * uniform());
+        match ModelFile::from_json(&with_map(&coefficients, [lo, hi])) {
+            Ok(file) => {
+                accepted += 1;
+                let input: Vec<f64> = [-100.0, -10.0, 0.0, 3.0, 7.0, 10.0, 100.0, 0.0].to_vec();
+                let output = file.predict(&input).unwrap();
+                // Finite and no larger than a record's values may be (1e15), 100 V being ten
+                // times the model's input scale.
+                assert!(
+                    output.iter().all(|y| y.abs() <= 1e15),
+                    "{coefficients:?} on [{lo}, {hi}]: {output:?}"
+                );
+            }
+            Err(e) => {
+                refused += 1;
+                assert!(e.to_string().contains("output_map"), "{e}");
+            }
+        }
+    }
+    assert!(
+        accepted > 20 && refused > 20,
+        "{accepted} accepted, {refused} refused"
+    );
+}
