@@ -266,6 +266,12 @@ fn bench_times_the_banks() {
         &["bench", "--vector-path", "all"],
         &["--vector-path", "--channels"],
     );
+    // A model file is not what the banks time: refused, not silently left out.
+    let table1 = models().join("table1-plant.json");
+    assert_fails(
+        &["bench", "--channels", "1", "--model", s(&table1)],
+        &["--model", "--channels"],
+    );
 }
 
 #[test]

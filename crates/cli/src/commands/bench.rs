@@ -30,7 +30,7 @@ pub struct Args {
     #[arg(long, default_value_t = 15)]
     repeats: usize,
     /// Also time this model file (its own operator count): a plant model times the forward
-    /// model, IHC and WIHC; an inverse model times DIHC.
+    /// model, IHC and WIHC; an inverse model times DIHC. Not with --channels.
     #[arg(long, value_name = "FILE")]
     model: Option<PathBuf>,
     /// Time the compensator banks instead, for these channel counts (comma-separated, each 1
@@ -344,6 +344,13 @@ pub fn run(args: &Args, ctx: Context) -> Result<(), CliError> {
     )?;
     args.clock.check()?;
     if let Some(channels) = &args.channels {
+        if let Some(model) = &args.model {
+            return Err(CliError::input(format!(
+                "--model {} with --channels: the banks are timed on the built-in channel \
+                 models, not a model file; time the file without --channels",
+                model.display()
+            )));
+        }
         let options = super::bench_bank::Options {
             samples: args.samples,
             repeats: args.repeats,
