@@ -88,7 +88,9 @@ pub struct Options {
     pub samples: usize,
     /// Timed runs per figure (the median is reported).
     pub repeats: usize,
+    /// What the figures are measured in (`--clock`).
     pub clock: Clock,
+    /// The compilations of the kernels to time (`--vector-path`).
     pub path: PathChoice,
 }
 
