@@ -479,229 +479,214 @@ pub fn run_study(
         max_fit_rms_percent: None,
         ..IdentifyOptions::default()
     };
-    let mut pso = options.pso.clone();
-    pso.seed = options.pso_seed;
-    let mut times = [0.0; 4];
-    let mut fit = |name: &str,
-                   step: &str,
-                   direction: Direction,
-                   solver: Solver,
-                   slot: usize,
-                   observer: &mut dyn StudyObserver|
-     -> Result<(Identification, Vec<f64>), StudyError> {
-        // The paper pipeline's plant model drives the one-sample-delayed loops: the swarm
-        // holds both delayed loops' gains to at most the default bound (as a penalty), so that
-        // they are stable by construction on any stage (issue 10).
-        let for_delayed =
-            matches!(solver, Solver::ParticleSwarm(_)) && direction == Direction::Plant;
-        let opts = IdentifyOptions {
-            direction,
-            method: solver.clone(),
-            delayed_loop_bound: for_delayed.then_some(DEFAULT_DELAYED_LOOP_BOUND),
-            ..base.clone()
-        };
-        let total = match &solver {
-            Solver::ParticleSwarm(p) => p.iterations as u64,
-            Solver::LeastSquares => 1,
-        };
-        observer.begin(step, total);
-        let t = Instant::now();
-        let mut convergence = Vec::new();
-        let is_swarm = matches!(solver, Solver::ParticleSwarm(_));
-        let mut watch = |p: &Progress| {
-            observer.advance(p.iteration as u64);
-            if is_swarm {
-                // The cost is the RMS error in normalised output units (output / its range).
-                convergence.push(p.best_cost * 100.0);
-            }
-        };
-        let result = match identify_observed(&v, &y, &opts, &mut watch) {
-            // A swarm cut short may find no model within the bound: the model without it,
-            // whose plain delayed loops are then refused and run guarded, with a note.
-            Err(IdentifyError::SwarmInfeasible { .. }) if for_delayed => {
-                let unbounded = IdentifyOptions {
-                    delayed_loop_bound: None,
-                    ..opts.clone()
-                };
-                identify_observed(&v, &y, &unbounded, &mut watch)
-            }
-            other => other,
-        }
-        .map_err(|error| StudyError::Identify {
-            model: name.to_string(),
-            error,
+    // The full pipeline's identification (the study's longest serial step) needs only the
+    // record: it runs on a thread of its own while the paper's and the exact pipeline's models
+    // are identified and tracked, their noise floor and ablations run, and is joined before
+    // the full pipeline's runs. The same numbers as one after the other.
+    std::thread::scope(|scope| {
+        // Its own copy of the record, which the study keeps.
+        let (command_v, measured_um) = (record.command_v.clone(), record.measured_um.clone());
+        let vibration = record.chain_segments.vibration.clone();
+        let base = &base;
+        let full_thread = scope.spawn(move || {
+            identify_full(
+                &command_v,
+                &measured_um,
+                fs,
+                options.decimation,
+                vibration,
+                base,
+                &options.full,
+            )
         });
-        times[slot] = t.elapsed().as_secs_f64();
-        observer.end();
-        result.map(|id| (id, convergence))
-    };
-    let (paper_plant, paper_plant_convergence) = fit(
-        "paper plant (PSO)",
-        "PSO plant",
-        Direction::Plant,
-        Solver::ParticleSwarm(pso.clone()),
-        0,
-        observer,
-    )?;
-    let (paper_inverse, paper_inverse_convergence) = fit(
-        "paper inverse (PSO)",
-        "PSO inverse",
-        Direction::Inverse,
-        Solver::ParticleSwarm(pso),
-        1,
-        observer,
-    )?;
-    let (exact_plant, _) = fit(
-        "exact plant (LS)",
-        "LS plant",
-        Direction::Plant,
-        Solver::LeastSquares,
-        2,
-        observer,
-    )?;
-    let (exact_inverse, _) = fit(
-        "exact inverse (LS)",
-        "LS inverse",
-        Direction::Inverse,
-        Solver::LeastSquares,
-        3,
-        observer,
-    )?;
-    observer.begin("full chain", 1);
-    let crate::full::FullIdentification {
-        plant: full_plant,
-        inverse: full_inverse,
-        seconds: full_identification_s,
-        creep_grid,
-    } = identify_full(
-        &record.command_v,
-        &record.measured_um,
-        fs,
-        options.decimation,
-        record.chain_segments.vibration.clone(),
-        &base,
-        &options.full,
-    )?;
-    observer.end();
-
-    // 3. Tracking.
-    let reference = Reference::paper();
-    let trajectory: MultisineTrajectory = reference.trajectory();
-    let period_s = reference.trajectory.period_s;
-    let samples = (options.periods as f64 * period_s * fs).round() as usize;
-    let per_period = (period_s * fs).round() as usize;
-    let (time_s, desired) = trajectory.sample(fs, samples);
-    let evaluation_start = samples - per_period;
-    // Checked now, before the runs, by the rule e_mhe applies.
-    check_mhe_bins(options.mhe_bins, per_period)
-        .map_err(|e| StudyError::Option(format!("the evaluated period (one per run): {e}")))?;
-    let stroke_um = quasi_static_stroke_um(&options.stage)?;
-    let desired_max = desired.iter().copied().fold(f64::NEG_INFINITY, f64::max);
-    if stroke_um.is_nan() || stroke_um < desired_max {
-        let amplifier = &options.stage.amplifier;
-        let amplifier_top = full_scale * amplifier.gain;
-        // Below the rail, the DAC's top and the gain limit the voltage, not the rail.
-        let more_voltage = if amplifier_top < amplifier.output_max_v * (1.0 - 1e-9) {
-            "amplifier.gain or dac.max_v: the DAC's top does not reach amplifier.output_max_v"
-        } else {
-            "amplifier.output_max_v"
+        let mut pso = options.pso.clone();
+        pso.seed = options.pso_seed;
+        let mut times = [0.0; 4];
+        let mut fit = |name: &str,
+                       step: &str,
+                       direction: Direction,
+                       solver: Solver,
+                       slot: usize,
+                       observer: &mut dyn StudyObserver|
+         -> Result<(Identification, Vec<f64>), StudyError> {
+            // The paper pipeline's plant model drives the one-sample-delayed loops: the swarm
+            // holds both delayed loops' gains to at most the default bound (as a penalty), so that
+            // they are stable by construction on any stage (issue 10).
+            let for_delayed =
+                matches!(solver, Solver::ParticleSwarm(_)) && direction == Direction::Plant;
+            let opts = IdentifyOptions {
+                direction,
+                method: solver.clone(),
+                delayed_loop_bound: for_delayed.then_some(DEFAULT_DELAYED_LOOP_BOUND),
+                ..base.clone()
+            };
+            let total = match &solver {
+                Solver::ParticleSwarm(p) => p.iterations as u64,
+                Solver::LeastSquares => 1,
+            };
+            observer.begin(step, total);
+            let t = Instant::now();
+            let mut convergence = Vec::new();
+            let is_swarm = matches!(solver, Solver::ParticleSwarm(_));
+            let mut watch = |p: &Progress| {
+                observer.advance(p.iteration as u64);
+                if is_swarm {
+                    // The cost is the RMS error in normalised output units (output / its range).
+                    convergence.push(p.best_cost * 100.0);
+                }
+            };
+            let result = match identify_observed(&v, &y, &opts, &mut watch) {
+                // A swarm cut short may find no model within the bound: the model without it,
+                // whose plain delayed loops are then refused and run guarded, with a note.
+                Err(IdentifyError::SwarmInfeasible { .. }) if for_delayed => {
+                    let unbounded = IdentifyOptions {
+                        delayed_loop_bound: None,
+                        ..opts.clone()
+                    };
+                    identify_observed(&v, &y, &unbounded, &mut watch)
+                }
+                other => other,
+            }
+            .map_err(|error| StudyError::Identify {
+                model: name.to_string(),
+                error,
+            });
+            times[slot] = t.elapsed().as_secs_f64();
+            observer.end();
+            result.map(|id| (id, convergence))
         };
-        return Err(StudyError::Option(format!(
-            "the stage cannot reach the trajectory: its quasi-static stroke at full command \
+        let (paper_plant, paper_plant_convergence) = fit(
+            "paper plant (PSO)",
+            "PSO plant",
+            Direction::Plant,
+            Solver::ParticleSwarm(pso.clone()),
+            0,
+            observer,
+        )?;
+        let (paper_inverse, paper_inverse_convergence) = fit(
+            "paper inverse (PSO)",
+            "PSO inverse",
+            Direction::Inverse,
+            Solver::ParticleSwarm(pso),
+            1,
+            observer,
+        )?;
+        let (exact_plant, _) = fit(
+            "exact plant (LS)",
+            "LS plant",
+            Direction::Plant,
+            Solver::LeastSquares,
+            2,
+            observer,
+        )?;
+        let (exact_inverse, _) = fit(
+            "exact inverse (LS)",
+            "LS inverse",
+            Direction::Inverse,
+            Solver::LeastSquares,
+            3,
+            observer,
+        )?;
+        // 3. Tracking.
+        let reference = Reference::paper();
+        let trajectory: MultisineTrajectory = reference.trajectory();
+        let period_s = reference.trajectory.period_s;
+        let samples = (options.periods as f64 * period_s * fs).round() as usize;
+        let per_period = (period_s * fs).round() as usize;
+        let (time_s, desired) = trajectory.sample(fs, samples);
+        let evaluation_start = samples - per_period;
+        // Checked now, before the runs, by the rule e_mhe applies.
+        check_mhe_bins(options.mhe_bins, per_period)
+            .map_err(|e| StudyError::Option(format!("the evaluated period (one per run): {e}")))?;
+        let stroke_um = quasi_static_stroke_um(&options.stage)?;
+        let desired_max = desired.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+        if stroke_um.is_nan() || stroke_um < desired_max {
+            let amplifier = &options.stage.amplifier;
+            let amplifier_top = full_scale * amplifier.gain;
+            // Below the rail, the DAC's top and the gain limit the voltage, not the rail.
+            let more_voltage = if amplifier_top < amplifier.output_max_v * (1.0 - 1e-9) {
+                "amplifier.gain or dac.max_v: the DAC's top does not reach amplifier.output_max_v"
+            } else {
+                "amplifier.output_max_v"
+            };
+            return Err(StudyError::Option(format!(
+                "the stage cannot reach the trajectory: its quasi-static stroke at full command \
              ({full_scale:.3} V, {amplifier_top:.1} V at the amplifier) is {stroke_um:.2} um, \
              below the trajectory's maximum of {desired_max:.2} um; give the stage more stroke \
              (e.g. hysteresis.preisach.stroke_um or hysteresis.bouc_wen.d_p_um_per_v) or more \
              voltage ({more_voltage})"
-        )));
-    }
-    let sensor_span_um = options.stage.adc.max_v / options.stage.sensor.sensitivity_v_per_um;
-    if sensor_span_um < desired_max {
-        return Err(StudyError::Option(format!(
-            "the stage's sensor cannot read the trajectory: its span ends at adc.max_v / \
+            )));
+        }
+        let sensor_span_um = options.stage.adc.max_v / options.stage.sensor.sensitivity_v_per_um;
+        if sensor_span_um < desired_max {
+            return Err(StudyError::Option(format!(
+                "the stage's sensor cannot read the trajectory: its span ends at adc.max_v / \
              sensor.sensitivity_v_per_um = {} / {} = {sensor_span_um:.2} um, below the \
              trajectory's maximum of {desired_max:.2} um, so the measured position would \
              saturate; raise adc.max_v or lower sensor.sensitivity_v_per_um",
-            options.stage.adc.max_v, options.stage.sensor.sensitivity_v_per_um
-        )));
-    }
-    let gain = full_scale / stroke_um;
-    let tracking_seed = options.seed.wrapping_add(1);
+                options.stage.adc.max_v, options.stage.sensor.sensitivity_v_per_um
+            )));
+        }
+        let gain = full_scale / stroke_um;
+        let tracking_seed = options.seed.wrapping_add(1);
 
-    let jobs: Vec<(String, Option<Method>, Option<&ModelFile>)> = vec![
-        ("uncompensated".into(), None, None),
-        (
-            "paper / ihc-delayed".into(),
-            Some(Method::IhcDelayed),
-            Some(&paper_plant.model),
-        ),
-        (
-            "paper / wihc-delayed".into(),
-            Some(Method::WihcDelayed),
-            Some(&paper_plant.model),
-        ),
-        (
-            "paper / dihc".into(),
-            Some(Method::Dihc),
-            Some(&paper_inverse.model),
-        ),
-        (
-            EXACT_IHC_LABEL.into(),
-            Some(Method::Ihc),
-            Some(&exact_plant.model),
-        ),
-        (
-            "exact / wihc".into(),
-            Some(Method::Wihc),
-            Some(&exact_plant.model),
-        ),
-        (
-            "exact / dihc".into(),
-            Some(Method::Dihc),
-            Some(&exact_inverse.model),
-        ),
-        (
-            FULL_IHC_LABEL.into(),
-            Some(Method::Ihc),
-            Some(&full_plant.model),
-        ),
-        (
-            "full / wihc".into(),
-            Some(Method::Wihc),
-            Some(&full_plant.model),
-        ),
-        (
-            "full / dihc".into(),
-            Some(Method::Dihc),
-            Some(&full_inverse.model),
-        ),
-        (
-            "PSO models / ihc".into(),
-            Some(Method::Ihc),
-            Some(&paper_plant.model),
-        ),
-        (
-            "PSO models / wihc".into(),
-            Some(Method::Wihc),
-            Some(&paper_plant.model),
-        ),
-        (
-            "LS models / ihc-delayed".into(),
-            Some(Method::IhcDelayed),
-            Some(&exact_plant.model),
-        ),
-        (
-            "LS models / wihc-delayed".into(),
-            Some(Method::WihcDelayed),
-            Some(&exact_plant.model),
-        ),
-    ];
-    observer.begin("tracking", jobs.len() as u64);
-    let job_count = jobs.len() as u64;
-    // Independent runs: in parallel, each on its own stage with the same noise seed.
-    let runs: Vec<TrackingRun> = jobs
-        .into_par_iter()
-        .map(
-            |(label, method, model)| -> Result<TrackingRun, StudyError> {
+        // The runs without the full pipeline's models now; its three after its identification.
+        let jobs: Vec<TrackingJob<'_>> = vec![
+            ("uncompensated".into(), None, None),
+            (
+                "paper / ihc-delayed".into(),
+                Some(Method::IhcDelayed),
+                Some(&paper_plant.model),
+            ),
+            (
+                "paper / wihc-delayed".into(),
+                Some(Method::WihcDelayed),
+                Some(&paper_plant.model),
+            ),
+            (
+                "paper / dihc".into(),
+                Some(Method::Dihc),
+                Some(&paper_inverse.model),
+            ),
+            (
+                EXACT_IHC_LABEL.into(),
+                Some(Method::Ihc),
+                Some(&exact_plant.model),
+            ),
+            (
+                "exact / wihc".into(),
+                Some(Method::Wihc),
+                Some(&exact_plant.model),
+            ),
+            (
+                "exact / dihc".into(),
+                Some(Method::Dihc),
+                Some(&exact_inverse.model),
+            ),
+            (
+                "PSO models / ihc".into(),
+                Some(Method::Ihc),
+                Some(&paper_plant.model),
+            ),
+            (
+                "PSO models / wihc".into(),
+                Some(Method::Wihc),
+                Some(&paper_plant.model),
+            ),
+            (
+                "LS models / ihc-delayed".into(),
+                Some(Method::IhcDelayed),
+                Some(&exact_plant.model),
+            ),
+            (
+                "LS models / wihc-delayed".into(),
+                Some(Method::WihcDelayed),
+                Some(&exact_plant.model),
+            ),
+        ];
+        // Independent runs: in parallel, each on its own stage with the same noise seed.
+        let track_job =
+            |(label, method, model): TrackingJob<'_>| -> Result<TrackingRun, StudyError> {
                 let mut note = None;
                 let mut method = method;
                 let (command_v, saturated) = match (method, model) {
@@ -710,9 +695,7 @@ pub fn run_study(
                         // the reason; its guarded form, which never oscillates, runs instead.
                         Err(StudyError::Compensator {
                             error:
-                                CompensatorError::Core(
-                                    refusal @ CoreError::DelayedLoopUnstable { .. },
-                                ),
+                                CompensatorError::Core(refusal @ CoreError::DelayedLoopUnstable { .. }),
                             ..
                         }) if m.guarded().is_some() => {
                             let guarded = m.guarded().unwrap_or(m);
@@ -760,227 +743,285 @@ pub fn run_study(
                     model_mismatch_rms_percent,
                     note,
                 })
-            },
-        )
-        .collect::<Result<_, _>>()?;
-    observer.advance(job_count);
-    observer.end();
+            };
+        observer.begin("tracking", jobs.len() as u64);
+        let job_count = jobs.len() as u64;
+        let mut runs: Vec<TrackingRun> = jobs
+            .into_par_iter()
+            .map(&track_job)
+            .collect::<Result<_, _>>()?;
+        observer.advance(job_count);
+        observer.end();
 
-    // 4. The noise floor: the uncompensated and the exact IHC commands again, with other
-    // sensor-noise seeds.
-    let extra_seeds: Vec<u64> = (2..2 + NOISE_FLOOR_EXTRA_SEEDS)
-        .map(|k| options.seed.wrapping_add(k))
-        .collect();
-    let exact_ihc_index = runs
-        .iter()
-        .position(|r| r.label == EXACT_IHC_LABEL)
-        .ok_or_else(|| StudyError::Option(format!("no {EXACT_IHC_LABEL} run")))?;
-    let mut floor = NoiseFloor {
-        seeds: std::iter::once(tracking_seed)
-            .chain(extra_seeds.iter().copied())
-            .collect(),
-        uncompensated: vec![runs[0].indices],
-        exact_ihc: vec![runs[exact_ihc_index].indices],
-        e_rms_spread_percent: 0.0,
-        e_mhe_spread_percent: 0.0,
-    };
-    observer.begin("noise floor", 2 * extra_seeds.len() as u64);
-    for (k, &seed) in extra_seeds.iter().enumerate() {
-        for (slot, run) in [(0usize, &runs[0]), (1, &runs[exact_ihc_index])] {
-            let label = format!("{} (noise seed {seed})", run.label);
-            let measured = track(&options.stage, seed, &run.command_v)?;
-            let indices = evaluate(
+        // 4. The noise floor: the uncompensated and the exact IHC commands again, with other
+        // sensor-noise seeds.
+        let extra_seeds: Vec<u64> = (2..2 + NOISE_FLOOR_EXTRA_SEEDS)
+            .map(|k| options.seed.wrapping_add(k))
+            .collect();
+        let exact_ihc_index = runs
+            .iter()
+            .position(|r| r.label == EXACT_IHC_LABEL)
+            .ok_or_else(|| StudyError::Option(format!("no {EXACT_IHC_LABEL} run")))?;
+        let mut floor = NoiseFloor {
+            seeds: std::iter::once(tracking_seed)
+                .chain(extra_seeds.iter().copied())
+                .collect(),
+            uncompensated: vec![runs[0].indices],
+            exact_ihc: vec![runs[exact_ihc_index].indices],
+            e_rms_spread_percent: 0.0,
+            e_mhe_spread_percent: 0.0,
+        };
+        observer.begin("noise floor", 2 * extra_seeds.len() as u64);
+        for (k, &seed) in extra_seeds.iter().enumerate() {
+            for (slot, run) in [(0usize, &runs[0]), (1, &runs[exact_ihc_index])] {
+                let label = format!("{} (noise seed {seed})", run.label);
+                let measured = track(&options.stage, seed, &run.command_v)?;
+                let indices = evaluate(
+                    &desired,
+                    &measured,
+                    evaluation_start,
+                    options.mhe_bins,
+                    &label,
+                )?;
+                if slot == 0 {
+                    floor.uncompensated.push(indices);
+                } else {
+                    floor.exact_ihc.push(indices);
+                }
+                observer.advance(2 * k as u64 + slot as u64 + 1);
+            }
+        }
+        observer.end();
+        let spread = |runs: &[TrackingIndices], f: fn(&TrackingIndices) -> f64| {
+            let (lo, hi) = runs
+                .iter()
+                .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), r| {
+                    (a.min(f(r)), b.max(f(r)))
+                });
+            hi - lo
+        };
+        floor.e_rms_spread_percent = spread(&floor.uncompensated, |r| r.e_rms_percent)
+            .max(spread(&floor.exact_ihc, |r| r.e_rms_percent));
+        floor.e_mhe_spread_percent = spread(&floor.uncompensated, |r| r.e_mhe_percent)
+            .max(spread(&floor.exact_ihc, |r| r.e_mhe_percent));
+
+        // 5. Ablations: the exact pipeline (LS plant model, exact IHC) with effects switched off.
+        let variants = ablation_variants(&options.stage);
+        observer.begin("ablations", variants.len() as u64);
+        let mut ablations = vec![AblationRun {
+            label: "baseline".into(),
+            change: "none (the study's stage)".into(),
+            changed: false,
+            plant_fit_rms_percent: exact_plant.report.fit.rms_percent,
+            ihc: runs[exact_ihc_index].indices,
+        }];
+        for (k, (label, change, config)) in variants.into_iter().enumerate() {
+            let changed = config != options.stage;
+            let mut stage = Stage::new(&config, options.seed)?;
+            let response = stage.run(&record.command_v[..record.hysteresis_samples]);
+            let y: Vec<f64> = response
+                .measured_position_um
+                .iter()
+                .step_by(options.decimation)
+                .copied()
+                .collect();
+            let opts = IdentifyOptions {
+                direction: Direction::Plant,
+                method: Solver::LeastSquares,
+                ..base.clone()
+            };
+            let plant =
+                identify_observed(&v, &y, &opts, &mut |_: &Progress| {}).map_err(|error| {
+                    StudyError::Identify {
+                        model: format!("{label} plant"),
+                        error,
+                    }
+                })?;
+            let run_label = format!("{label} / ihc");
+            let (command_v, _) =
+                drive(&plant.model, Method::Ihc, &desired, full_scale, &run_label)?;
+            let measured = track(&config, tracking_seed, &command_v)?;
+            let ihc = evaluate(
                 &desired,
                 &measured,
                 evaluation_start,
                 options.mhe_bins,
-                &label,
+                &run_label,
             )?;
-            if slot == 0 {
-                floor.uncompensated.push(indices);
-            } else {
-                floor.exact_ihc.push(indices);
-            }
-            observer.advance(2 * k as u64 + slot as u64 + 1);
-        }
-    }
-    observer.end();
-    let spread = |runs: &[TrackingIndices], f: fn(&TrackingIndices) -> f64| {
-        let (lo, hi) = runs
-            .iter()
-            .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), r| {
-                (a.min(f(r)), b.max(f(r)))
+            ablations.push(AblationRun {
+                label: label.into(),
+                change,
+                changed,
+                plant_fit_rms_percent: plant.report.fit.rms_percent,
+                ihc,
             });
-        hi - lo
-    };
-    floor.e_rms_spread_percent = spread(&floor.uncompensated, |r| r.e_rms_percent)
-        .max(spread(&floor.exact_ihc, |r| r.e_rms_percent));
-    floor.e_mhe_spread_percent = spread(&floor.uncompensated, |r| r.e_mhe_percent)
-        .max(spread(&floor.exact_ihc, |r| r.e_mhe_percent));
-
-    // 5. Ablations: the exact pipeline (LS plant model, exact IHC) with effects switched off.
-    let variants = ablation_variants(&options.stage);
-    observer.begin("ablations", variants.len() as u64);
-    let mut ablations = vec![AblationRun {
-        label: "baseline".into(),
-        change: "none (the study's stage)".into(),
-        changed: false,
-        plant_fit_rms_percent: exact_plant.report.fit.rms_percent,
-        ihc: runs[exact_ihc_index].indices,
-    }];
-    for (k, (label, change, config)) in variants.into_iter().enumerate() {
-        let changed = config != options.stage;
-        let mut stage = Stage::new(&config, options.seed)?;
-        let response = stage.run(&record.command_v[..record.hysteresis_samples]);
-        let y: Vec<f64> = response
-            .measured_position_um
-            .iter()
-            .step_by(options.decimation)
-            .copied()
-            .collect();
-        let opts = IdentifyOptions {
-            direction: Direction::Plant,
-            method: Solver::LeastSquares,
-            ..base.clone()
-        };
-        let plant = identify_observed(&v, &y, &opts, &mut |_: &Progress| {}).map_err(|error| {
-            StudyError::Identify {
-                model: format!("{label} plant"),
-                error,
-            }
-        })?;
-        let run_label = format!("{label} / ihc");
-        let (command_v, _) = drive(&plant.model, Method::Ihc, &desired, full_scale, &run_label)?;
-        let measured = track(&config, tracking_seed, &command_v)?;
-        let ihc = evaluate(
-            &desired,
-            &measured,
-            evaluation_start,
-            options.mhe_bins,
-            &run_label,
-        )?;
-        ablations.push(AblationRun {
-            label: label.into(),
-            change,
-            changed,
-            plant_fit_rms_percent: plant.report.fit.rms_percent,
-            ihc,
-        });
-        observer.advance(k as u64 + 1);
-    }
-    observer.end();
-
-    // 6. Beyond the paper: how long and how fast (the duration and speed studies).
-    // The exact WIHC solves the same equation as the exact IHC (P[v] = y_d, eqs. (5) and
-    // (9)): its drive is IHC's to rounding (the tracking runs above show both), so the long
-    // runs repeat only IHC and DIHC.
-    let approaches = |ihc_only: bool| {
-        let mut list = vec![
-            Approach::uncompensated(gain),
-            Approach::model(EXACT_IHC_LABEL, &exact_plant.model, Method::Ihc),
-            Approach::model(FULL_IHC_LABEL, &full_plant.model, Method::Ihc),
-        ];
-        if !ihc_only {
-            list.push(Approach::model(
-                "full / dihc",
-                &full_inverse.model,
-                Method::Dihc,
-            ));
+            observer.advance(k as u64 + 1);
         }
-        list
-    };
-    observer.begin("duration", 1);
-    let duration = run_duration(
-        &options.stage,
-        tracking_seed,
-        &approaches(false),
-        full_scale,
-        options.mhe_bins,
-    )?;
-    observer.end();
-    observer.begin("speed", 1);
-    let speed = run_speed(
-        &options.stage,
-        tracking_seed,
-        &approaches(true),
-        full_scale,
-        options.full.inverse_band_hz,
-    )?;
-    observer.end();
-    // 7. Learning from repetition, from the exact and the full pipeline's IHC.
-    observer.begin("learning", 1);
-    let learning = crate::learning_study::run_learning(
-        &options.stage,
-        tracking_seed,
-        &exact_plant.model,
-        &full_plant.model,
-        options
-            .slew_aware_learning
-            .then(|| crate::speed::max_drive_step_v(&options.stage)),
-        options
-            .feasible_learning_start
-            .then(|| crate::speed::max_drive_step_v(&options.stage)),
-    )?;
-    observer.end();
+        observer.end();
 
-    let record_s = record.command_v.len() as f64 / fs;
-    let mut runs = runs.into_iter();
-    let uncompensated = runs.next().expect("14 runs");
-    let paper_runs: Vec<TrackingRun> = runs.by_ref().take(3).collect();
-    let exact_runs: Vec<TrackingRun> = runs.by_ref().take(3).collect();
-    let full_runs: Vec<TrackingRun> = runs.by_ref().take(3).collect();
-    let cross_runs: Vec<TrackingRun> = runs.collect();
-    Ok(Study {
-        options: options.clone(),
-        sample_rate_hz: fs,
-        time_s,
-        desired_um: desired,
-        evaluation_start,
-        period_s,
-        feedforward_gain_v_per_um: gain,
-        stroke_um,
-        identification: record,
-        uncompensated,
-        pipelines: vec![
-            Pipeline {
-                name: "paper".into(),
-                description: "particle swarm identification (as the paper), delayed IHC and WIHC \
-                              (as real-time implementations), DIHC"
-                    .into(),
-                plant: paper_plant,
-                inverse: paper_inverse,
-                runs: paper_runs,
-                convergence: [paper_plant_convergence, paper_inverse_convergence],
-            },
-            Pipeline {
-                name: "exact".into(),
-                description: "constrained least-squares identification (global optimum), exact \
-                              per-sample IHC and WIHC, DIHC"
-                    .into(),
-                plant: exact_plant,
-                inverse: exact_inverse,
-                runs: exact_runs,
-                convergence: [Vec::new(), Vec::new()],
-            },
-        ],
-        full: FullPipeline {
+        observer.begin("full chain", 1);
+        let crate::full::FullIdentification {
             plant: full_plant,
             inverse: full_inverse,
-            runs: full_runs,
-            identification_s: full_identification_s,
+            seconds: full_identification_s,
             creep_grid,
-            record_s,
-        },
-        duration,
-        speed,
-        learning,
-        cross_runs,
-        noise_floor: floor,
-        ablations,
-        identification_times_s: times,
-        elapsed_s: started.elapsed().as_secs_f64(),
+        } = full_thread
+            .join()
+            .unwrap_or_else(|panic| std::panic::resume_unwind(panic))?;
+        let full_jobs: Vec<TrackingJob<'_>> = vec![
+            (
+                FULL_IHC_LABEL.into(),
+                Some(Method::Ihc),
+                Some(&full_plant.model),
+            ),
+            (
+                "full / wihc".into(),
+                Some(Method::Wihc),
+                Some(&full_plant.model),
+            ),
+            (
+                "full / dihc".into(),
+                Some(Method::Dihc),
+                Some(&full_inverse.model),
+            ),
+        ];
+        let full_runs: Vec<TrackingRun> = full_jobs
+            .into_par_iter()
+            .map(&track_job)
+            .collect::<Result<_, _>>()?;
+        // After the uncompensated run and the paper's and the exact pipeline's three each.
+        runs.splice(7..7, full_runs);
+        observer.end();
+
+        // 6. Beyond the paper: how long and how fast (the duration and speed studies).
+        // The exact WIHC solves the same equation as the exact IHC (P[v] = y_d, eqs. (5) and
+        // (9)): its drive is IHC's to rounding (the tracking runs above show both), so the long
+        // runs repeat only IHC and DIHC.
+        let approaches = |ihc_only: bool| {
+            let mut list = vec![
+                Approach::uncompensated(gain),
+                Approach::model(EXACT_IHC_LABEL, &exact_plant.model, Method::Ihc),
+                Approach::model(FULL_IHC_LABEL, &full_plant.model, Method::Ihc),
+            ];
+            if !ihc_only {
+                list.push(Approach::model(
+                    "full / dihc",
+                    &full_inverse.model,
+                    Method::Dihc,
+                ));
+            }
+            list
+        };
+        // The duration, speed and learning studies are independent: together, so that each one's
+        // last runs share the processors with the others' (the same numbers as one after another).
+        observer.begin("duration, speed and learning", 1);
+        let (duration, (speed, learning)) = rayon::join(
+            || {
+                run_duration(
+                    &options.stage,
+                    tracking_seed,
+                    &approaches(false),
+                    full_scale,
+                    options.mhe_bins,
+                )
+            },
+            || {
+                rayon::join(
+                    || {
+                        run_speed(
+                            &options.stage,
+                            tracking_seed,
+                            &approaches(true),
+                            full_scale,
+                            options.full.inverse_band_hz,
+                        )
+                    },
+                    || {
+                        // 7. Learning from repetition, from the exact and the full pipeline's IHC.
+                        crate::learning_study::run_learning(
+                            &options.stage,
+                            tracking_seed,
+                            &exact_plant.model,
+                            &full_plant.model,
+                            options
+                                .slew_aware_learning
+                                .then(|| crate::speed::max_drive_step_v(&options.stage)),
+                            options
+                                .feasible_learning_start
+                                .then(|| crate::speed::max_drive_step_v(&options.stage)),
+                        )
+                    },
+                )
+            },
+        );
+        let (duration, speed, learning) = (duration?, speed?, learning?);
+        observer.end();
+
+        let record_s = record.command_v.len() as f64 / fs;
+        let mut runs = runs.into_iter();
+        let uncompensated = runs.next().expect("14 runs");
+        let paper_runs: Vec<TrackingRun> = runs.by_ref().take(3).collect();
+        let exact_runs: Vec<TrackingRun> = runs.by_ref().take(3).collect();
+        let full_runs: Vec<TrackingRun> = runs.by_ref().take(3).collect();
+        let cross_runs: Vec<TrackingRun> = runs.collect();
+        Ok(Study {
+            options: options.clone(),
+            sample_rate_hz: fs,
+            time_s,
+            desired_um: desired,
+            evaluation_start,
+            period_s,
+            feedforward_gain_v_per_um: gain,
+            stroke_um,
+            identification: record,
+            uncompensated,
+            pipelines: vec![
+                Pipeline {
+                    name: "paper".into(),
+                    description:
+                        "particle swarm identification (as the paper), delayed IHC and WIHC \
+                              (as real-time implementations), DIHC"
+                            .into(),
+                    plant: paper_plant,
+                    inverse: paper_inverse,
+                    runs: paper_runs,
+                    convergence: [paper_plant_convergence, paper_inverse_convergence],
+                },
+                Pipeline {
+                    name: "exact".into(),
+                    description:
+                        "constrained least-squares identification (global optimum), exact \
+                              per-sample IHC and WIHC, DIHC"
+                            .into(),
+                    plant: exact_plant,
+                    inverse: exact_inverse,
+                    runs: exact_runs,
+                    convergence: [Vec::new(), Vec::new()],
+                },
+            ],
+            full: FullPipeline {
+                plant: full_plant,
+                inverse: full_inverse,
+                runs: full_runs,
+                identification_s: full_identification_s,
+                creep_grid,
+                record_s,
+            },
+            duration,
+            speed,
+            learning,
+            cross_runs,
+            noise_floor: floor,
+            ablations,
+            identification_times_s: times,
+            elapsed_s: started.elapsed().as_secs_f64(),
+        })
     })
 }
+
+/// A tracking run to make: its label, its compensator (none: the uncompensated feedforward
+/// gain) and the model the compensator inverts.
+type TrackingJob<'m> = (String, Option<Method>, Option<&'m ModelFile>);
 
 /// The label of the exact pipeline's IHC run, which the noise floor and the ablations repeat.
 pub(crate) const EXACT_IHC_LABEL: &str = "exact / ihc";

@@ -1141,6 +1141,26 @@ pub fn write_outputs(
 ) -> Result<OutputFiles, OutputError> {
     std::fs::create_dir_all(dir)
         .map_err(|e| OutputError::Io(format!("cannot create {}: {e}", dir.display())))?;
+    // The series files (tens of megabytes of numbers to format) are written on a thread of
+    // their own while the figures are drawn.
+    std::thread::scope(|scope| {
+        let series = scope.spawn(|| write_series(study, dir));
+        write_figures_and_report(study, dir, meta, observer, || {
+            series
+                .join()
+                .unwrap_or_else(|panic| std::panic::resume_unwind(panic))
+        })
+    })
+}
+
+/// [`write_outputs`] but the series files, which `series` writes (or has written).
+fn write_figures_and_report(
+    study: &Study,
+    dir: &Path,
+    meta: &RunMeta,
+    observer: &mut dyn StudyObserver,
+    series: impl FnOnce() -> Result<Vec<SeriesFile>, OutputError>,
+) -> Result<OutputFiles, OutputError> {
     let start = study.evaluation_start;
     let desired_eval = &study.desired_um[start..];
     let time = &study.time_s;
@@ -1498,7 +1518,7 @@ pub fn write_outputs(
     }
 
     // The series the figures show, as CSV beside study.json.
-    let series = write_series(study, dir)?;
+    let series = series()?;
 
     // Summary.
     let mut summary = summarize(study);

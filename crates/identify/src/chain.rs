@@ -466,26 +466,27 @@ fn plant_chain(
     let delayed_full: Vec<f64> = (0..voltage.len())
         .map(|i| voltage[i.saturating_sub(delay)])
         .collect();
-    let mut add = |name: &str, file: &ModelFile, input: &[f64]| -> Result<(), IdentifyError> {
-        let predicted = file.predict(input)?;
-        let rms = |range: std::ops::Range<usize>| {
-            ErrorStats::new(&predicted[range.clone()], &displacement[range], y_scale)
-                .map(|s| s.rms_percent)
-                .unwrap_or(f64::NAN)
+    // Each prediction (a pass over the whole record at the full rate) once: `add` returns it.
+    let mut add =
+        |name: &str, file: &ModelFile, input: &[f64]| -> Result<Vec<f64>, IdentifyError> {
+            let predicted = file.predict(input)?;
+            let rms = |range: std::ops::Range<usize>| {
+                ErrorStats::new(&predicted[range.clone()], &displacement[range], y_scale)
+                    .map(|s| s.rms_percent)
+                    .unwrap_or(f64::NAN)
+            };
+            contributions.push(Contribution {
+                model: name.to_owned(),
+                rms_percent: rms(span.clone()),
+                segment_rms_percent: segment.clone().map(rms),
+            });
+            Ok(predicted)
         };
-        contributions.push(Contribution {
-            model: name.to_owned(),
-            rms_percent: rms(span.clone()),
-            segment_rms_percent: segment.clone().map(rms),
-        });
-        Ok(())
-    };
     add("hysteresis", &base.model, &delayed_full)?;
     if creep_fit.is_some() {
         let creep_only = model.clone().with_links(rate, model.creep.clone(), None)?;
-        add("+ creep", &creep_only, &delayed_full)?;
         // The joint fit's own errors (hysteresis and creep), fitted and held-out samples.
-        let predicted = creep_only.predict(&delayed_full)?;
+        let predicted = add("+ creep", &creep_only, &delayed_full)?;
         let stats = |range: std::ops::Range<usize>| {
             ErrorStats::new(&predicted[range.clone()], &displacement[range], y_scale)
         };
@@ -494,10 +495,11 @@ fn plant_chain(
         }
         hysteresis_report.holdout = stats(span.end..end);
     }
-    if dynamics_fit.is_some() {
-        add("+ vibration", &model, voltage)?;
-    }
-    let predicted = model.predict(voltage)?;
+    let predicted = if dynamics_fit.is_some() {
+        add("+ vibration", &model, voltage)?
+    } else {
+        model.predict(voltage)?
+    };
     let fit = ErrorStats::new(&predicted[span.clone()], &displacement[span], y_scale).ok_or_else(
         || IdentifyError::InvalidOption {
             option: "fitting span",
