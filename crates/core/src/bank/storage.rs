@@ -376,10 +376,19 @@ pub(crate) fn gather<T: Real, const W: usize, const K: usize>(
     let Some(last) = n.checked_sub(1) else {
         return [Lanes::zero(); K];
     };
-    // Each sliced to the common length `n`, so that `k <= last < n` needs no check below
-    // (`get`, not an index: where the compiler cannot see `n` is every table's length, as on
-    // a Cortex-M build, the step keeps no path to a panic; a table is never shorter).
-    let tables = tables.map(|t| t.get(..n).unwrap_or(&[]));
+    // Each sliced to the common length `n` (`get`, not an index, so that the step keeps no
+    // path to a panic, as on a Cortex-M build; a table is never shorter), leaving the loop
+    // below only tables of length `n`, so that the compiler drops the check of each lane's read
+    // (`k <= last < n`): a table that could still be empty, as with `unwrap_or(&[])`, kept a
+    // compare and a branch on every lane of every table.
+    let mut sliced: [&[[T; W]]; K] = [&[]; K];
+    for (s, t) in sliced.iter_mut().zip(tables) {
+        let Some(t) = t.get(..n) else {
+            return [Lanes::zero(); K];
+        };
+        *s = t;
+    }
+    let tables = sliced;
     let mut out = [[T::zero(); W]; K];
     for l in 0..W {
         let k = (index.0[l] as usize).min(last);
