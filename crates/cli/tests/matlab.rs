@@ -9,8 +9,9 @@
 //! with the `hystcomp` binary's (`CARGO_BIN_EXE_hystcomp`): a nested build of the binary from
 //! another crate's tests would rebuild its dependencies with other features (minutes).
 //!
-//! Octave is a prerequisite `.ci/run` installs (`octave`, `liboctave-dev`, `gnuplot-nox`): the
-//! test fails without it under CI and records a skip elsewhere.
+//! Octave is a prerequisite `.ci/run` installs (`octave`, `liboctave-dev`, `gnuplot-nox`,
+//! `fonts-freefont-otf`, `ghostscript`): the test fails without it under CI and records a skip
+//! elsewhere.
 
 use std::path::Path;
 use std::process::Command;
@@ -24,7 +25,7 @@ fn octave_here() -> bool {
     require_tool(
         "octave",
         on_path("octave-cli") && on_path("mkoctfile"),
-        "apt-get install octave liboctave-dev gnuplot-nox",
+        "apt-get install octave liboctave-dev gnuplot-nox fonts-freefont-otf ghostscript",
     )
 }
 

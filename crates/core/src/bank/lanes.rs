@@ -1,20 +1,65 @@
 //! `W` values side by side, one per channel of a block, and the masks that stand in for the
 //! single-channel code's branches.
 //!
-//! Every operation is the scalar operation applied lane by lane, written as a loop over a fixed
-//! number of lanes with no branch inside, so that the compiler turns it into vector
-//! instructions (and, on a target without them, into the scalar code it replaces). A branch of
+//! Every operation is the scalar operation applied lane by lane (written out once per lane or
+//! as a loop over the lanes, see [`lanewise`]) with no branch inside, so that the compiler
+//! turns it into vector instructions (and, on a target without them, into the scalar code it
+//! replaces). A branch of
 //! the single-channel compensator becomes a [`Mask`] and a [`Lanes::select`]: each lane
 //! computes exactly the operations its single-channel twin computes, in the same order, so its
 //! results are the same bits.
 
-// Lane loops index every array by the lane, the form the compiler vectorises (each lane the same
-// operation): clearer here than zipped iterators.
+// Lane loops (optimised builds) index every array by the lane, the form the compiler vectorises
+// (each lane the same operation): clearer here than zipped iterators.
 #![allow(clippy::needless_range_loop)]
 
 use core::ops::{Add, BitAnd, BitOr, Div, Mul, Neg, Not, Sub};
 
 use crate::Real;
+
+/// `[f(0), f(1), ..., f(W - 1)]`, in that order.
+///
+/// With debug assertions (the `dev` and `test` profiles) it is written out lane by lane,
+/// without a loop, for blocks of up to eight lanes (the branch for `W` is chosen when the code
+/// is generated, an inline `const` condition), and every lane operation below takes it: a loop
+/// per lane operation left the optimiser tens of thousands of small loops in one kernel to
+/// rotate and unroll one by one, most of the compile time of every crate that instantiates a
+/// bank (one IHC bank's three vector paths at `opt-level = 1`: 4 min 15 s of CPU with loops,
+/// 1 min 40 s written out; the bank tests 37 min, 5.6 min). Optimised builds keep the loops
+/// (`core::array::from_fn` here, the loops below): the loop vectoriser turns them into vector
+/// instructions where the written-out lanes, left to the straight-line vectoriser, ran the
+/// delayed IHC kernel 30 % slower. Both compute the same operations in the same order, the
+/// same bits: `lanewise` is checked against `from_fn` below, and the bank tests compare every
+/// channel with its single compensator in the written-out form.
+#[inline(always)]
+pub(crate) fn lanewise<V, const W: usize>(f: impl FnMut(usize) -> V) -> [V; W] {
+    #[cfg(debug_assertions)]
+    let mut f = f;
+    #[cfg(debug_assertions)]
+    macro_rules! written_out {
+        ($($n:literal => [$($l:literal),*]);*) => {$(
+            if const { W == $n } {
+                let out: [V; $n] = [$(f($l)),*];
+                // SAFETY: `W == $n`: `[V; $n]` and `[V; W]` are the same type; `out` is
+                // forgotten, so that nothing is dropped twice.
+                let out = core::mem::ManuallyDrop::new(out);
+                return unsafe { core::mem::transmute_copy(&*out) };
+            }
+        )*};
+    }
+    #[cfg(debug_assertions)]
+    written_out!(
+        1 => [0];
+        2 => [0, 1];
+        3 => [0, 1, 2];
+        4 => [0, 1, 2, 3];
+        5 => [0, 1, 2, 3, 4];
+        6 => [0, 1, 2, 3, 4, 5];
+        7 => [0, 1, 2, 3, 4, 5, 6];
+        8 => [0, 1, 2, 3, 4, 5, 6, 7]
+    );
+    core::array::from_fn(f)
+}
 
 /// One value per lane.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -30,53 +75,79 @@ impl<T: Copy, const W: usize> Lanes<T, W> {
     /// The same value in every lane.
     #[inline(always)]
     pub fn splat(value: T) -> Self {
-        Lanes([value; W])
+        #[cfg(debug_assertions)]
+        return Lanes(lanewise(|_| value));
+        #[cfg(not(debug_assertions))]
+        {
+            Lanes([value; W])
+        }
     }
 
     /// `f(a, b)` lane by lane.
     #[inline(always)]
     pub fn zip<U: Copy, V: Copy>(self, other: Lanes<U, W>, f: impl Fn(T, U) -> V) -> Lanes<V, W> {
-        Lanes(core::array::from_fn(|l| f(self.0[l], other.0[l])))
+        Lanes(lanewise(|l| f(self.0[l], other.0[l])))
     }
 
     /// `f(a)` lane by lane.
     #[inline(always)]
     pub fn map<V: Copy>(self, f: impl Fn(T) -> V) -> Lanes<V, W> {
-        Lanes(core::array::from_fn(|l| f(self.0[l])))
+        Lanes(lanewise(|l| f(self.0[l])))
     }
 
     /// `f(a)` lane by lane, as a mask.
     #[inline(always)]
     pub fn test<M: Real>(self, f: impl Fn(T) -> bool) -> Mask<M, W> {
-        let mut out = [M::Bits::default(); W];
-        for l in 0..W {
-            out[l] = Mask::<M, W>::flag(f(self.0[l]));
+        #[cfg(debug_assertions)]
+        return Mask(lanewise(|l| Mask::<M, W>::flag(f(self.0[l]))));
+        #[cfg(not(debug_assertions))]
+        {
+            let mut out = [M::Bits::default(); W];
+            for l in 0..W {
+                out[l] = Mask::<M, W>::flag(f(self.0[l]));
+            }
+            Mask(out)
         }
-        Mask(out)
     }
 
     /// `f(a, b)` lane by lane, as a mask.
     #[inline(always)]
     pub fn compare<M: Real>(self, other: Self, f: impl Fn(T, T) -> bool) -> Mask<M, W> {
-        let mut out = [M::Bits::default(); W];
-        for l in 0..W {
-            out[l] = Mask::<M, W>::flag(f(self.0[l], other.0[l]));
+        #[cfg(debug_assertions)]
+        return Mask(lanewise(|l| Mask::<M, W>::flag(f(self.0[l], other.0[l]))));
+        #[cfg(not(debug_assertions))]
+        {
+            let mut out = [M::Bits::default(); W];
+            for l in 0..W {
+                out[l] = Mask::<M, W>::flag(f(self.0[l], other.0[l]));
+            }
+            Mask(out)
         }
-        Mask(out)
     }
 
     /// `if mask { yes } else { no }` lane by lane.
     #[inline(always)]
     pub fn select<M: Real>(mask: Mask<M, W>, yes: Self, no: Self) -> Self {
-        let mut out = no.0;
-        for l in 0..W {
-            out[l] = if mask.0[l] != M::Bits::default() {
+        #[cfg(debug_assertions)]
+        return Lanes(lanewise(|l| {
+            if mask.0[l] != M::Bits::default() {
                 yes.0[l]
             } else {
                 no.0[l]
-            };
+            }
+        }));
+        #[cfg(not(debug_assertions))]
+        {
+            let mut out = no.0;
+            for l in 0..W {
+                out[l] = if mask.0[l] != M::Bits::default() {
+                    yes.0[l]
+                } else {
+                    no.0[l]
+                };
+            }
+            Lanes(out)
         }
-        Lanes(out)
     }
 
     /// `self` where `mask` is set, `no` elsewhere.
@@ -177,13 +248,27 @@ impl<T: Real, const W: usize> Mask<T, W> {
     /// Every lane set to `value`.
     #[inline(always)]
     pub fn splat(value: bool) -> Self {
-        Mask([Self::flag(value); W])
+        #[cfg(debug_assertions)]
+        return Mask(lanewise(|_| Self::flag(value)));
+        #[cfg(not(debug_assertions))]
+        {
+            Mask([Self::flag(value); W])
+        }
     }
 
     /// Whether any lane is set (no early exit, so that it vectorises).
     #[inline(always)]
     pub fn any(self) -> bool {
-        self.0.iter().fold(T::Bits::default(), |a, &b| a | b) != T::Bits::default()
+        #[cfg(debug_assertions)]
+        {
+            let mut all = T::Bits::default();
+            lanewise::<(), W>(|l| all = all | self.0[l]);
+            all != T::Bits::default()
+        }
+        #[cfg(not(debug_assertions))]
+        {
+            self.0.iter().fold(T::Bits::default(), |a, &b| a | b) != T::Bits::default()
+        }
     }
 
     /// Whether every lane is set.
@@ -221,11 +306,16 @@ impl<T: Real, const W: usize> BitAnd for Mask<T, W> {
     type Output = Self;
     #[inline(always)]
     fn bitand(self, other: Self) -> Self {
-        let mut out = self.0;
-        for l in 0..W {
-            out[l] = self.0[l] & other.0[l];
+        #[cfg(debug_assertions)]
+        return Mask(lanewise(|l| self.0[l] & other.0[l]));
+        #[cfg(not(debug_assertions))]
+        {
+            let mut out = self.0;
+            for l in 0..W {
+                out[l] = self.0[l] & other.0[l];
+            }
+            Mask(out)
         }
-        Mask(out)
     }
 }
 
@@ -233,11 +323,16 @@ impl<T: Real, const W: usize> BitOr for Mask<T, W> {
     type Output = Self;
     #[inline(always)]
     fn bitor(self, other: Self) -> Self {
-        let mut out = self.0;
-        for l in 0..W {
-            out[l] = self.0[l] | other.0[l];
+        #[cfg(debug_assertions)]
+        return Mask(lanewise(|l| self.0[l] | other.0[l]));
+        #[cfg(not(debug_assertions))]
+        {
+            let mut out = self.0;
+            for l in 0..W {
+                out[l] = self.0[l] | other.0[l];
+            }
+            Mask(out)
         }
-        Mask(out)
     }
 }
 
@@ -245,10 +340,55 @@ impl<T: Real, const W: usize> Not for Mask<T, W> {
     type Output = Self;
     #[inline(always)]
     fn not(self) -> Self {
-        let mut out = self.0;
-        for l in 0..W {
-            out[l] = !self.0[l];
+        #[cfg(debug_assertions)]
+        return Mask(lanewise(|l| !self.0[l]));
+        #[cfg(not(debug_assertions))]
+        {
+            let mut out = self.0;
+            for l in 0..W {
+                out[l] = !self.0[l];
+            }
+            Mask(out)
         }
-        Mask(out)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::lanewise;
+    use alloc::string::{String, ToString};
+    use alloc::vec::Vec;
+
+    /// `lanewise` against its plain reference, `core::array::from_fn`, for `W` lanes: the same
+    /// values, each lane's closure called once and in lane order, owned values (`String`)
+    /// moved out once (a double drop would abort the test).
+    fn agrees<const W: usize>() {
+        let mut calls = Vec::new();
+        let out: [u64; W] = lanewise(|l| {
+            calls.push(l);
+            (l as u64).wrapping_mul(0x9e37_79b9_7f4a_7c15) ^ W as u64
+        });
+        let reference: [u64; W] =
+            core::array::from_fn(|l| (l as u64).wrapping_mul(0x9e37_79b9_7f4a_7c15) ^ W as u64);
+        assert_eq!(out, reference, "{W} lanes");
+        assert_eq!(calls, (0..W).collect::<Vec<_>>(), "{W} lanes: calls");
+        let owned: [String; W] = lanewise(|l| l.to_string().repeat(l + 1));
+        let reference: [String; W] = core::array::from_fn(|l| l.to_string().repeat(l + 1));
+        assert_eq!(owned, reference, "{W} lanes: owned");
+    }
+
+    #[test]
+    fn written_out_lanes_equal_the_loop_for_every_width() {
+        agrees::<1>();
+        agrees::<2>();
+        agrees::<3>();
+        agrees::<4>();
+        agrees::<5>();
+        agrees::<6>();
+        agrees::<7>();
+        agrees::<8>();
+        // Beyond the written-out widths: the loop itself.
+        agrees::<9>();
+        agrees::<16>();
     }
 }

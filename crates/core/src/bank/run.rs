@@ -102,7 +102,7 @@ fn run_blocks<'a, T: Real, K: BlockKernel<T, W>, const W: usize>(
     control: &mut [T],
 ) {
     for ((mut block, d), c) in blocks.zip(desired.chunks(W)).zip(control.chunks_mut(W)) {
-        let lanes = Lanes(core::array::from_fn(|l| {
+        let lanes = Lanes(super::lanes::lanewise(|l| {
             d.get(l).copied().unwrap_or(T::nan())
         }));
         let out = kernel.step(&mut block, lanes);
