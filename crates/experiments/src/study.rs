@@ -631,38 +631,22 @@ pub fn run_study(
         let tracking_seed = options.seed.wrapping_add(1);
 
         // The runs without the full pipeline's models now; its three after its identification.
-        let jobs: Vec<TrackingJob<'_>> = vec![
-            ("uncompensated".into(), None, None),
-            (
-                "paper / ihc-delayed".into(),
-                Some(Method::IhcDelayed),
-                Some(&paper_plant.model),
-            ),
-            (
-                "paper / wihc-delayed".into(),
-                Some(Method::WihcDelayed),
-                Some(&paper_plant.model),
-            ),
-            (
-                "paper / dihc".into(),
-                Some(Method::Dihc),
-                Some(&paper_inverse.model),
-            ),
-            (
-                EXACT_IHC_LABEL.into(),
-                Some(Method::Ihc),
-                Some(&exact_plant.model),
-            ),
-            (
-                "exact / wihc".into(),
-                Some(Method::Wihc),
-                Some(&exact_plant.model),
-            ),
-            (
-                "exact / dihc".into(),
-                Some(Method::Dihc),
-                Some(&exact_inverse.model),
-            ),
+        let mut jobs: Vec<TrackingJob<'_>> = vec![("uncompensated".into(), None, None)];
+        jobs.extend(pipeline_jobs(
+            "paper",
+            [Method::IhcDelayed, Method::WihcDelayed],
+            &paper_plant.model,
+            &paper_inverse.model,
+        ));
+        jobs.extend(pipeline_jobs(
+            "exact",
+            [Method::Ihc, Method::Wihc],
+            &exact_plant.model,
+            &exact_inverse.model,
+        ));
+        // Where the full pipeline's runs go, after the paper's and the exact pipeline's.
+        let full_at = jobs.len();
+        jobs.extend([
             (
                 "PSO models / ihc".into(),
                 Some(Method::Ihc),
@@ -683,7 +667,7 @@ pub fn run_study(
                 Some(Method::WihcDelayed),
                 Some(&exact_plant.model),
             ),
-        ];
+        ]);
         // Independent runs: in parallel, each on its own stage with the same noise seed.
         let track_job =
             |(label, method, model): TrackingJob<'_>| -> Result<TrackingRun, StudyError> {
@@ -868,29 +852,16 @@ pub fn run_study(
         } = full_thread
             .join()
             .unwrap_or_else(|panic| std::panic::resume_unwind(panic))?;
-        let full_jobs: Vec<TrackingJob<'_>> = vec![
-            (
-                FULL_IHC_LABEL.into(),
-                Some(Method::Ihc),
-                Some(&full_plant.model),
-            ),
-            (
-                "full / wihc".into(),
-                Some(Method::Wihc),
-                Some(&full_plant.model),
-            ),
-            (
-                "full / dihc".into(),
-                Some(Method::Dihc),
-                Some(&full_inverse.model),
-            ),
-        ];
-        let full_runs: Vec<TrackingRun> = full_jobs
-            .into_par_iter()
-            .map(&track_job)
-            .collect::<Result<_, _>>()?;
-        // After the uncompensated run and the paper's and the exact pipeline's three each.
-        runs.splice(7..7, full_runs);
+        let full_runs: Vec<TrackingRun> = pipeline_jobs(
+            "full",
+            [Method::Ihc, Method::Wihc],
+            &full_plant.model,
+            &full_inverse.model,
+        )
+        .into_par_iter()
+        .map(&track_job)
+        .collect::<Result<_, _>>()?;
+        runs.splice(full_at..full_at, full_runs);
         observer.end();
 
         // 6. Beyond the paper: how long and how fast (the duration and speed studies).
@@ -1022,6 +993,22 @@ pub fn run_study(
 /// A tracking run to make: its label, its compensator (none: the uncompensated feedforward
 /// gain) and the model the compensator inverts.
 type TrackingJob<'m> = (String, Option<Method>, Option<&'m ModelFile>);
+
+/// A pipeline's three runs, labelled `"{pipeline} / {method}"`: its two IHC-family
+/// `methods` on its `plant` model and DIHC on its `inverse` model.
+fn pipeline_jobs<'m>(
+    pipeline: &str,
+    methods: [Method; 2],
+    plant: &'m ModelFile,
+    inverse: &'m ModelFile,
+) -> [TrackingJob<'m>; 3] {
+    let job = |method: Method, model| (format!("{pipeline} / {method}"), Some(method), Some(model));
+    [
+        job(methods[0], plant),
+        job(methods[1], plant),
+        job(Method::Dihc, inverse),
+    ]
+}
 
 /// The label of the exact pipeline's IHC run, which the noise floor and the ablations repeat.
 pub(crate) const EXACT_IHC_LABEL: &str = "exact / ihc";
@@ -1208,4 +1195,25 @@ fn indices_range(values: &[f64]) -> f64 {
             (a.min(v), b.max(v))
         });
     hi - lo
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The labels other studies look runs up by are the ones the pipelines' jobs carry.
+    #[test]
+    fn the_pipelines_label_their_runs_as_the_other_studies_look_them_up() {
+        let model =
+            ModelFile::load(std::path::Path::new("../../models/table1-plant.json")).unwrap();
+        let [exact, ..] = pipeline_jobs("exact", [Method::Ihc, Method::Wihc], &model, &model);
+        let [full, wihc, dihc] = pipeline_jobs("full", [Method::Ihc, Method::Wihc], &model, &model);
+        assert_eq!(exact.0, EXACT_IHC_LABEL);
+        assert_eq!(full.0, FULL_IHC_LABEL);
+        assert_eq!(wihc.0, "full / wihc");
+        assert_eq!(
+            (dihc.0.as_str(), dihc.1),
+            ("full / dihc", Some(Method::Dihc))
+        );
+    }
 }

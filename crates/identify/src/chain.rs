@@ -241,6 +241,29 @@ pub struct Contribution {
     pub segment_rms_percent: Option<f64>,
 }
 
+impl Contribution {
+    /// The row of `model` whose `predicted` output is judged against `target` over `span`
+    /// and over `segment` when there is one, in % of `scale` (NaN where a range is empty).
+    fn measured(
+        model: &str,
+        predicted: &[f64],
+        target: &[f64],
+        scale: f64,
+        span: &std::ops::Range<usize>,
+        segment: Option<&std::ops::Range<usize>>,
+    ) -> Self {
+        let rms = |range: &std::ops::Range<usize>| {
+            ErrorStats::new(&predicted[range.clone()], &target[range.clone()], scale)
+                .map_or(f64::NAN, |s| s.rms_percent)
+        };
+        Contribution {
+            model: model.to_owned(),
+            rms_percent: rms(span),
+            segment_rms_percent: segment.map(rms),
+        }
+    }
+}
+
 /// How the chain was identified and how well it fits.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct ChainReport {
@@ -470,16 +493,14 @@ fn plant_chain(
     let mut add =
         |name: &str, file: &ModelFile, input: &[f64]| -> Result<Vec<f64>, IdentifyError> {
             let predicted = file.predict(input)?;
-            let rms = |range: std::ops::Range<usize>| {
-                ErrorStats::new(&predicted[range.clone()], &displacement[range], y_scale)
-                    .map(|s| s.rms_percent)
-                    .unwrap_or(f64::NAN)
-            };
-            contributions.push(Contribution {
-                model: name.to_owned(),
-                rms_percent: rms(span.clone()),
-                segment_rms_percent: segment.clone().map(rms),
-            });
+            contributions.push(Contribution::measured(
+                name,
+                &predicted,
+                displacement,
+                y_scale,
+                &span,
+                segment.as_ref(),
+            ));
             Ok(predicted)
         };
     add("hysteresis", &base.model, &delayed_full)?;
@@ -858,16 +879,14 @@ fn inverse_chain(
     let mut contributions = Vec::new();
     let mut add = |name: &str, file: &ModelFile| -> Result<(), IdentifyError> {
         let predicted = file.predict(displacement)?;
-        let rms = |range: std::ops::Range<usize>| {
-            ErrorStats::new(&predicted[range.clone()], &voltage[range], v_scale)
-                .map(|s| s.rms_percent)
-                .unwrap_or(f64::NAN)
-        };
-        contributions.push(Contribution {
-            model: name.to_owned(),
-            rms_percent: rms(span.clone()),
-            segment_rms_percent: segment.clone().map(rms),
-        });
+        contributions.push(Contribution::measured(
+            name,
+            &predicted,
+            voltage,
+            v_scale,
+            &span,
+            segment.as_ref(),
+        ));
         Ok(())
     };
     add("hysteresis", &base.model)?;
