@@ -885,7 +885,8 @@ pub fn run_study(
         };
         // The duration, speed and learning studies are independent: together, so that each one's
         // last runs share the processors with the others' (the same numbers as one after another).
-        observer.begin("duration, speed and learning", 1);
+        // One step for the three, its label within the command line's 12-character column.
+        observer.begin("more studies", 1);
         let (duration, (speed, learning)) = rayon::join(
             || {
                 run_duration(
