@@ -1,11 +1,14 @@
 //! A small probe of one compensator bank's cost per channel-step (issue 16), for instruction
 //! counts under `valgrind --tool=callgrind` and for timing one kernel on one vector path
-//! without building the command-line tool:
+//! without building the command-line tool. A bench target without a harness, so that
+//! `cargo test` does not build it (it compiles every bank kernel on every vector path):
 //!
 //! ```text
-//! cargo build --release -p hystcomp-core --example bank_probe
-//! ./target/release/examples/bank_probe KIND PRECISION PATH CHANNELS TICKS REPEATS
+//! cargo bench -p hystcomp-core --bench bank_probe -- KIND PRECISION PATH CHANNELS TICKS REPEATS
 //! ```
+//!
+//! or, for callgrind, the binary `cargo bench --no-run` names
+//! (`target/release/deps/bank_probe-*`) with the same arguments.
 //!
 //! `KIND` is `ihc`, `ihc-delayed`, `ihc-guarded`, `wihc`, `wihc-delayed`, `wihc-guarded` or
 //! `dihc`; `PRECISION` `f32` or `f64`; `PATH` `best`, `baseline`, `avx2` or `avx512` (valgrind
@@ -137,7 +140,8 @@ fn probe<T: Real>(kind: &str, path: VectorPath, channels: usize, ticks: usize, r
 }
 
 fn main() {
-    let args: Vec<String> = std::env::args().collect();
+    // `cargo bench` appends `--bench`; the probe's arguments are positional.
+    let args: Vec<String> = std::env::args().filter(|a| a != "--bench").collect();
     let arg = |i: usize, default: &str| args.get(i).cloned().unwrap_or_else(|| default.into());
     let kind = arg(1, "ihc");
     let precision = arg(2, "f32");
