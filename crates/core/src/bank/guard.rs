@@ -8,38 +8,56 @@ use crate::Real;
 
 type L<T, const W: usize> = Lanes<T, W>;
 
-/// The guard's state, loaded from a block's rows.
+/// The guard's state, loaded from a block's rows. The diagnostic counters are not loaded:
+/// each sample raises a counter by at most one, so the guard collects the lanes it counts as
+/// masks and [`GuardLanes::store`] adds them to the rows only when one is set (a rare event),
+/// instead of reading and writing three rows of 64-bit counters every sample.
 #[derive(Debug, Clone, Copy)]
-pub(crate) struct GuardLanes<T, const W: usize> {
+pub(crate) struct GuardLanes<T: Real, const W: usize> {
     pub min: L<T, W>,
     pub max: L<T, W>,
     pub previous: L<T, W>,
-    pub saturated: Lanes<u64, W>,
-    pub loop_saturated: Lanes<u64, W>,
-    pub non_finite: Lanes<u64, W>,
+    saturated: Mask<T, W>,
+    loop_saturated: Mask<T, W>,
+    non_finite: Mask<T, W>,
+    /// Whether [`GuardLanes::store`] clears the counters (after [`GuardLanes::reset`]).
+    cleared: bool,
 }
 
 impl<T: Real, const W: usize> GuardLanes<T, W> {
-    /// The guard with its limits, previous output and counters in rows `min`, `max` and
-    /// `previous` of `block`.
+    /// The guard with its limits and previous output in rows `min`, `max` and `previous` of
+    /// `block`.
     #[inline(always)]
     pub fn load(block: &Block<'_, T, W>, min: usize, max: usize, previous: usize) -> Self {
+        let none = Mask::splat(false);
         GuardLanes {
             min: block.get(min),
             max: block.get(max),
             previous: block.get(previous),
-            saturated: block.counter(SATURATED),
-            loop_saturated: block.counter(LOOP_SATURATED),
-            non_finite: block.counter(NON_FINITE),
+            saturated: none,
+            loop_saturated: none,
+            non_finite: none,
+            cleared: false,
         }
     }
 
+    /// Writes the previous output back to row `previous` and adds the sample's counts to the
+    /// counters (cleared first after a reset).
     #[inline(always)]
     pub fn store(&self, block: &mut Block<'_, T, W>, previous: usize) {
         block.set(previous, self.previous);
-        block.set_counter(SATURATED, self.saturated);
-        block.set_counter(LOOP_SATURATED, self.loop_saturated);
-        block.set_counter(NON_FINITE, self.non_finite);
+        for (row, counted) in [
+            (SATURATED, self.saturated),
+            (LOOP_SATURATED, self.loop_saturated),
+            (NON_FINITE, self.non_finite),
+        ] {
+            if self.cleared {
+                block.set_counter(row, Lanes::splat(0));
+            }
+            if counted.any() {
+                block.set_counter(row, block.counter(row) + counted.count());
+            }
+        }
     }
 
     /// The reset state: previous output 0 clamped into the limits, counters cleared.
@@ -47,9 +65,11 @@ impl<T: Real, const W: usize> GuardLanes<T, W> {
     pub fn reset(&mut self) {
         let zero = Lanes::zero();
         self.previous = self.clamp_or(zero, zero);
-        self.saturated = Lanes::splat(0);
-        self.loop_saturated = Lanes::splat(0);
-        self.non_finite = Lanes::splat(0);
+        let none = Mask::splat(false);
+        self.saturated = none;
+        self.loop_saturated = none;
+        self.non_finite = none;
+        self.cleared = true;
     }
 
     /// `OutputGuard::accept`: the lanes whose desired position is finite; the others are
@@ -57,7 +77,7 @@ impl<T: Real, const W: usize> GuardLanes<T, W> {
     #[inline(always)]
     pub fn accept(&mut self, desired: L<T, W>) -> Mask<T, W> {
         let finite = desired.is_finite();
-        self.non_finite = self.non_finite + (!finite).count();
+        self.non_finite = self.non_finite | !finite;
         finite
     }
 
@@ -99,8 +119,8 @@ impl<T: Real, const W: usize> GuardLanes<T, W> {
         active: Mask<T, W>,
     ) -> L<T, W> {
         let counted = clamped & active;
-        self.loop_saturated = self.loop_saturated + (counted & reachable).count();
-        self.saturated = self.saturated + counted.and_not(reachable).count();
+        self.loop_saturated = self.loop_saturated | (counted & reachable);
+        self.saturated = self.saturated | counted.and_not(reachable);
         self.previous = out.or_keep(active, self.previous);
         self.previous
     }
