@@ -194,7 +194,11 @@ pub(crate) fn solve<T: Real, E: LaneEquation<T, W>, const W: usize>(
     ];
     let some_moving = first.test::<T>(|k| k > 0);
     let before = first.map(|k| k.saturating_sub(1));
-    let [prefix] = gather([block.table(rows.prefix(), n)], before);
+    let [prefix] = gather(
+        [block.table(rows.prefix(), n)],
+        before,
+        block.hardware_gather,
+    );
     let moving_weight = prefix.or_keep(some_moving, zero);
     let mut alpha = state.a + moving_weight;
     let mut beta = state.memory_sum - moving_weight * state.input;
@@ -211,7 +215,7 @@ pub(crate) fn solve<T: Real, E: LaneEquation<T, W>, const W: usize>(
             break;
         }
         // Each lane's operator `cursor`: its memory, threshold and weight.
-        let [w, r, b] = gather(operator_rows, cursor);
+        let [w, r, b] = gather(operator_rows, cursor, block.hardware_gather);
         // Rising, operator i starts moving at u = max(w_i + r_i, lo); falling, at
         // l = min(w_i, hi).
         let breakpoint = (w + r).max(edge).or_keep(rising, w.min(edge));
@@ -263,7 +267,11 @@ pub(crate) fn solve<T: Real, E: LaneEquation<T, W>, const W: usize>(
     let inverse_alpha = if E::INVERSE_ALPHA {
         let some_moving = moving.test::<T>(|k| k > 0);
         let before = moving.map(|k| k.saturating_sub(1));
-        let [inverse] = gather([block.table(rows.inverse_alpha(), n)], before);
+        let [inverse] = gather(
+            [block.table(rows.inverse_alpha(), n)],
+            before,
+            block.hardware_gather,
+        );
         inverse.or_keep(some_moving, state.inverse_a)
     } else {
         state.inverse_a

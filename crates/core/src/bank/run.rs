@@ -94,14 +94,18 @@ pub fn with_vector_path<R>(path: VectorPath, f: impl FnOnce() -> R) -> R {
 
 /// Steps every block: `desired` and `control` hold one value per channel, in channel order
 /// (the blocks' padding lanes beyond the last channel are fed NaN and their outputs dropped).
+/// `hardware_gather`: whether the caller is compiled with AVX2 (a constant at each call), so
+/// that the tables' reads may use its gather instructions ([`Block::hardware_gather`]).
 #[inline(always)]
 fn run_blocks<'a, T: Real, K: BlockKernel<T, W>, const W: usize>(
     kernel: &K,
     blocks: impl Iterator<Item = Block<'a, T, W>>,
     desired: &[T],
     control: &mut [T],
+    hardware_gather: bool,
 ) {
     for ((mut block, d), c) in blocks.zip(desired.chunks(W)).zip(control.chunks_mut(W)) {
+        block.hardware_gather = hardware_gather;
         let lanes = Lanes(super::lanes::lanewise(|l| {
             d.get(l).copied().unwrap_or(T::nan())
         }));
@@ -124,7 +128,7 @@ unsafe fn run_blocks_avx2<'a, T: Real, K: BlockKernel<T, W>, const W: usize>(
     desired: &[T],
     control: &mut [T],
 ) {
-    run_blocks(kernel, blocks, desired, control)
+    run_blocks(kernel, blocks, desired, control, true)
 }
 
 /// [`run_blocks`] compiled with AVX-512 (foundation, with 256-bit forms, byte/word and
@@ -140,7 +144,7 @@ unsafe fn run_blocks_avx512<'a, T: Real, K: BlockKernel<T, W>, const W: usize>(
     desired: &[T],
     control: &mut [T],
 ) {
-    run_blocks(kernel, blocks, desired, control)
+    run_blocks(kernel, blocks, desired, control, true)
 }
 
 /// Steps every block with the compilation of the kernel [`VectorPath::current`] names.
@@ -165,5 +169,5 @@ pub(crate) fn run<'a, T: Real, K: BlockKernel<T, W>, const W: usize>(
         }
         VectorPath::Best | VectorPath::Baseline => {}
     }
-    run_blocks(kernel, blocks, desired, control)
+    run_blocks(kernel, blocks, desired, control, false)
 }

@@ -111,11 +111,15 @@ pub(crate) const NON_FINITE: usize = 2;
 /// The rows of one block of an IHC or WIHC bank: the lanes' play-operator bank (the inverse
 /// PI part of eq. (7) for IHC, the plant's PI part for WIHC) with its tables and state, the
 /// output guard and the input polynomial.
+///
+/// The scalar rows come first and then the coefficients, at offsets known when the code is
+/// compiled (so that a kernel's reads of them need no bounds check after one check of the
+/// block's length against [`PlantRows::HEAD`]), then the operator tables, `n` rows each.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub(crate) struct PlantRows {
     /// Operator rows (the largest operator count among the channels).
     pub n: usize,
-    /// Coefficient rows of the input polynomials.
+    /// Coefficient rows of the input polynomials (at least [`PLAIN_DEGREE`]).
     pub degree: usize,
     /// Value rows per block.
     pub values: usize,
@@ -129,25 +133,29 @@ impl PlantRows {
             values: 5 * n + Self::SCALARS + degree,
         }
     }
+    /// The first row of the operator tables.
+    const fn tables(&self) -> usize {
+        Self::SCALARS + self.degree
+    }
     pub const fn thresholds(&self) -> usize {
-        0
+        self.tables()
     }
     pub const fn weights(&self) -> usize {
-        self.n
+        self.tables() + self.n
     }
     /// `b_1 + ... + b_{k+1}`.
     pub const fn prefix(&self) -> usize {
-        2 * self.n
+        self.tables() + 2 * self.n
     }
     /// `1 / (a + b_1 + ... + b_{k+1})`.
     pub const fn inverse_alpha(&self) -> usize {
-        3 * self.n
+        self.tables() + 3 * self.n
     }
     pub const fn memory(&self) -> usize {
-        4 * self.n
+        self.tables() + 4 * self.n
     }
     pub const fn scalar(&self, which: usize) -> usize {
-        5 * self.n + which
+        which
     }
     /// The rows of the output limits `(min, max)`.
     pub const fn limits(&self) -> (usize, usize) {
@@ -155,7 +163,7 @@ impl PlantRows {
     }
     /// Row of `c_{j + 1}`.
     pub const fn coefficient(&self, j: usize) -> usize {
-        5 * self.n + Self::SCALARS + j
+        Self::SCALARS + j
     }
     pub const A: usize = 0;
     pub const INVERSE_A: usize = 1;
@@ -166,6 +174,9 @@ impl PlantRows {
     pub const LIMIT_MAX: usize = 6;
     pub const PREVIOUS: usize = 7;
     const SCALARS: usize = 8;
+    /// The rows every block holds before its operator tables: the scalars and the paper's
+    /// three coefficients.
+    pub const HEAD: usize = Self::SCALARS + PLAIN_DEGREE;
 
     pub const COUNTS: usize = 7;
     pub const OPERATORS: usize = 0;
@@ -178,7 +189,8 @@ impl PlantRows {
 }
 
 /// The rows of one block of a DIHC bank: the inverse model (eq. (10)), its input range, the
-/// output guard and the input polynomial.
+/// output guard and the input polynomial; scalars and coefficients first, as
+/// [`PlantRows`].
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub(crate) struct InverseRows {
     pub n: usize,
@@ -194,24 +206,27 @@ impl InverseRows {
             values: 3 * n + Self::SCALARS + degree,
         }
     }
+    const fn tables(&self) -> usize {
+        Self::SCALARS + self.degree
+    }
     pub const fn thresholds(&self) -> usize {
-        0
+        self.tables()
     }
     pub const fn weights(&self) -> usize {
-        self.n
+        self.tables() + self.n
     }
     pub const fn memory(&self) -> usize {
-        2 * self.n
+        self.tables() + 2 * self.n
     }
     pub const fn scalar(&self, which: usize) -> usize {
-        3 * self.n + which
+        which
     }
     /// The rows of the output limits `(min, max)`.
     pub const fn limits(&self) -> (usize, usize) {
         (self.scalar(Self::LIMIT_MIN), self.scalar(Self::LIMIT_MAX))
     }
     pub const fn coefficient(&self, j: usize) -> usize {
-        3 * self.n + Self::SCALARS + j
+        Self::SCALARS + j
     }
     pub const INPUT_MIN: usize = 0;
     pub const INPUT_MAX: usize = 1;
@@ -219,6 +234,8 @@ impl InverseRows {
     pub const LIMIT_MAX: usize = 3;
     pub const PREVIOUS: usize = 4;
     const SCALARS: usize = 5;
+    /// The rows every block holds before its operator tables (see [`PlantRows::HEAD`]).
+    pub const HEAD: usize = Self::SCALARS + PLAIN_DEGREE;
 
     pub const COUNTS: usize = 3;
     pub const OPERATORS: usize = 0;
@@ -261,6 +278,7 @@ impl<T: Real, S: BankStorage<T, W>, const W: usize> Blocks<T, S, W> {
                 values,
                 counts,
                 counters,
+                hardware_gather: false,
             })
     }
 
@@ -309,9 +327,21 @@ pub(crate) struct Block<'a, T, const W: usize> {
     pub values: &'a mut [[T; W]],
     pub counts: &'a mut [[u32; W]],
     pub counters: &'a mut [[u64; W]],
+    /// Whether the code stepping the block is compiled with AVX2 (set by `super::run`, a
+    /// constant on each of its paths): then [`gather`] reads each lane's row with the
+    /// processor's gather instruction instead of lane by lane.
+    pub hardware_gather: bool,
 }
 
 impl<T: Real, const W: usize> Block<'_, T, W> {
+    /// Whether the block holds `head` rows of values and the count rows up to `counts`: a
+    /// kernel checks it once, so that the compiler drops the bounds checks of its reads of the
+    /// rows at fixed offsets before them (the layouts always hold them).
+    #[inline(always)]
+    pub fn holds(&self, head: usize, counts: usize) -> bool {
+        self.values.len() >= head && self.counts.len() >= counts && self.counters.len() >= COUNTERS
+    }
+
     /// Row `row` of values (zeros when out of range, which the layout never asks for).
     #[inline(always)]
     pub fn get(&self, row: usize) -> Lanes<T, W> {
@@ -363,24 +393,26 @@ impl<T: Real, const W: usize> Block<'_, T, W> {
 /// [`Block::table`]): each lane reads its own operator, the same row of every table, and
 /// computes where once for all of them. An index beyond the tables (which only lanes whose
 /// result is discarded ask for) reads their last row: the index is clamped to the tables'
-/// common length, so that the compiler drops the check of each lane's reads (a gather costs an
-/// extract, a load and an insert per lane and table).
-// Indexed by the lane, the form the compiler vectorises (as in `super::lanes`).
-#[allow(clippy::needless_range_loop)]
+/// common length.
+///
+/// With `hardware` (code compiled for AVX2, see [`Block::hardware_gather`]) and eight lanes of
+/// `f32` or `f64`, each table is read with one gather instruction (`vgatherdps`, two
+/// `vgatherdpd`); otherwise lane by lane (an extract, a load and an insert per lane and
+/// table). Both read the same values.
 #[inline(always)]
 pub(crate) fn gather<T: Real, const W: usize, const K: usize>(
     tables: [&[[T; W]]; K],
     index: Lanes<u32, W>,
+    hardware: bool,
 ) -> [Lanes<T, W>; K] {
     let n = tables.iter().map(|t| t.len()).min().unwrap_or(0);
     let Some(last) = n.checked_sub(1) else {
         return [Lanes::zero(); K];
     };
     // Each sliced to the common length `n` (`get`, not an index, so that the step keeps no
-    // path to a panic, as on a Cortex-M build; a table is never shorter), leaving the loop
-    // below only tables of length `n`, so that the compiler drops the check of each lane's read
-    // (`k <= last < n`): a table that could still be empty, as with `unwrap_or(&[])`, kept a
-    // compare and a branch on every lane of every table.
+    // path to a panic, as on a Cortex-M build; a table is never shorter), leaving the reads
+    // below only tables of length `n`, so that the compiler drops the check of each lane's
+    // read (`k <= last < n`).
     let mut sliced: [&[[T; W]]; K] = [&[]; K];
     for (s, t) in sliced.iter_mut().zip(tables) {
         let Some(t) = t.get(..n) else {
@@ -388,7 +420,24 @@ pub(crate) fn gather<T: Real, const W: usize, const K: usize>(
         };
         *s = t;
     }
-    let tables = sliced;
+    #[cfg(all(feature = "std", target_arch = "x86_64"))]
+    if hardware && let Some(out) = x86::gather(sliced, index, last) {
+        return out;
+    }
+    #[cfg(not(all(feature = "std", target_arch = "x86_64")))]
+    let _ = hardware;
+    lane_by_lane(sliced, index, last)
+}
+
+/// [`gather`] lane by lane, from tables of at least `last + 1` rows.
+// Indexed by the lane, the form the compiler vectorises (as in `super::lanes`).
+#[allow(clippy::needless_range_loop)]
+#[inline(always)]
+fn lane_by_lane<T: Real, const W: usize, const K: usize>(
+    tables: [&[[T; W]]; K],
+    index: Lanes<u32, W>,
+    last: usize,
+) -> [Lanes<T, W>; K] {
     let mut out = [[T::zero(); W]; K];
     for l in 0..W {
         let k = (index.0[l] as usize).min(last);
@@ -397,4 +446,122 @@ pub(crate) fn gather<T: Real, const W: usize, const K: usize>(
         }
     }
     out.map(Lanes)
+}
+
+/// The gather instructions of AVX2, for blocks of eight `f32` or `f64` lanes.
+#[cfg(all(feature = "std", target_arch = "x86_64"))]
+mod x86 {
+    use core::any::TypeId;
+    use core::arch::x86_64::{
+        __m256i, _mm256_add_epi32, _mm256_castsi256_si128, _mm256_extracti128_si256,
+        _mm256_i32gather_pd, _mm256_i32gather_ps, _mm256_loadu_si256, _mm256_min_epu32,
+        _mm256_set1_epi32, _mm256_setr_epi32, _mm256_slli_epi32, _mm256_storeu_pd,
+        _mm256_storeu_ps,
+    };
+
+    use super::Lanes;
+    use crate::Real;
+
+    /// [`super::gather`] of eight `f32` or `f64` lanes with AVX2's gathers; `None` for other
+    /// lane counts and types. Every table holds `last + 1` rows or more.
+    ///
+    /// Only code compiled with AVX2 may call it (the banks' AVX2 and AVX-512 paths), where the
+    /// gathers are inlined.
+    #[inline(always)]
+    pub(super) fn gather<T: Real, const W: usize, const K: usize>(
+        tables: [&[[T; W]]; K],
+        index: Lanes<u32, W>,
+        last: usize,
+    ) -> Option<[Lanes<T, W>; K]> {
+        if W != 8 || tables.iter().any(|t| t.len() <= last) {
+            return None;
+        }
+        // Offsets in elements of the tables' rows of eight: within i32 for any table a bank
+        // holds (a few thousand operators at most).
+        let last = i32::try_from(last).ok().filter(|l| *l < i32::MAX / 16)?;
+        let index: [u32; 8] = core::array::from_fn(|l| index.0.get(l).copied().unwrap_or(0));
+        if TypeId::of::<T>() == TypeId::of::<f32>() {
+            let tables = tables.map(|t| {
+                // SAFETY: `T` is `f32` and `W` is 8: `[T; W]` is `[f32; 8]`, same layout.
+                unsafe { core::slice::from_raw_parts(t.as_ptr().cast::<[f32; 8]>(), t.len()) }
+            });
+            // SAFETY: the callers run with AVX2 (see above); every offset is below
+            // `8 (last + 1) <= 8 len` of each table.
+            let out = unsafe { gather_f32(tables, index, last) };
+            // SAFETY: `[[f32; 8]; K]` is `[Lanes<T, W>; K]` for `T = f32`, `W = 8`.
+            return Some(unsafe { core::mem::transmute_copy(&out) });
+        }
+        if TypeId::of::<T>() == TypeId::of::<f64>() {
+            let tables = tables.map(|t| {
+                // SAFETY: `T` is `f64` and `W` is 8.
+                unsafe { core::slice::from_raw_parts(t.as_ptr().cast::<[f64; 8]>(), t.len()) }
+            });
+            // SAFETY: as above.
+            let out = unsafe { gather_f64(tables, index, last) };
+            // SAFETY: `[[f64; 8]; K]` is `[Lanes<T, W>; K]` for `T = f64`, `W = 8`.
+            return Some(unsafe { core::mem::transmute_copy(&out) });
+        }
+        None
+    }
+
+    /// The offset of lane `l`'s element of row `min(index[l], last)` in a table of rows of
+    /// eight: `8 min(index[l], last) + l`.
+    #[target_feature(enable = "avx2")]
+    #[inline]
+    fn offsets(index: [u32; 8], last: i32) -> __m256i {
+        // SAFETY: `index` holds eight `u32`, 32 bytes (an unaligned load).
+        let k = unsafe { _mm256_loadu_si256(index.as_ptr().cast()) };
+        let k = _mm256_min_epu32(k, _mm256_set1_epi32(last));
+        _mm256_add_epi32(
+            _mm256_slli_epi32::<3>(k),
+            _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7),
+        )
+    }
+
+    /// # Safety
+    /// The processor has AVX2; every table holds `last + 1` rows or more.
+    #[target_feature(enable = "avx2")]
+    #[inline]
+    unsafe fn gather_f32<const K: usize>(
+        tables: [&[[f32; 8]]; K],
+        index: [u32; 8],
+        last: i32,
+    ) -> [[f32; 8]; K] {
+        let offsets = offsets(index, last);
+        let mut out = [[0.0f32; 8]; K];
+        for (o, t) in out.iter_mut().zip(tables) {
+            // SAFETY: each offset is below `8 (last + 1)`, within the table.
+            unsafe {
+                let v = _mm256_i32gather_ps::<4>(t.as_ptr().cast(), offsets);
+                _mm256_storeu_ps(o.as_mut_ptr(), v);
+            }
+        }
+        out
+    }
+
+    /// # Safety
+    /// As [`gather_f32`].
+    #[target_feature(enable = "avx2")]
+    #[inline]
+    unsafe fn gather_f64<const K: usize>(
+        tables: [&[[f64; 8]]; K],
+        index: [u32; 8],
+        last: i32,
+    ) -> [[f64; 8]; K] {
+        let offsets = offsets(index, last);
+        let low = _mm256_castsi256_si128(offsets);
+        let high = _mm256_extracti128_si256::<1>(offsets);
+        let mut out = [[0.0f64; 8]; K];
+        for (o, t) in out.iter_mut().zip(tables) {
+            // SAFETY: each offset is below `8 (last + 1)`, within the table; `o` holds eight
+            // `f64`, written four at a time.
+            unsafe {
+                let base: *const f64 = t.as_ptr().cast();
+                let (a, b) = o.split_at_mut(4);
+                _mm256_storeu_pd(a.as_mut_ptr(), _mm256_i32gather_pd::<8>(base, low));
+                _mm256_storeu_pd(b.as_mut_ptr(), _mm256_i32gather_pd::<8>(base, high));
+            }
+        }
+        out
+    }
 }
