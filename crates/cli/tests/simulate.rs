@@ -355,3 +355,34 @@ fn simulate_reports_the_share_of_samples_at_the_slew_or_rail_limit() {
     ]);
     assert!(stderr(&text).contains("slew limit"), "{}", stderr(&text));
 }
+
+#[test]
+fn the_stage_files_seed_sets_the_noise_and_seed_on_the_command_line_overrides_it() {
+    let dir = tempfile::tempdir().unwrap();
+    let input = dir.path().join("volts.csv");
+    write_input(&input, 10_000.0, 2_000);
+    let seeded = dir.path().join("seeded.toml");
+    std::fs::write(&seeded, "seed = 5\n").unwrap();
+    let run = |name: &str, extra: &[&str]| {
+        let output = dir.path().join(name);
+        let mut args = vec!["--json", "simulate", "--drive", s(&input), "-o", s(&output)];
+        args.extend_from_slice(extra);
+        let out = hystcomp(&args);
+        assert!(out.status.success(), "{}", stderr(&out));
+        let summary: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+        let measured: Vec<f64> = read_output(&output).1.iter().map(|r| r[4]).collect();
+        (summary["seed"].as_u64().unwrap(), measured)
+    };
+    let (file_seed, from_file) = run("file.csv", &["--stage", s(&seeded)]);
+    let (flag_seed, from_flag) = run("flag.csv", &["--seed", "5"]);
+    let (default_seed, from_default) = run("default.csv", &[]);
+    let (override_seed, overridden) = run("override.csv", &["--stage", s(&seeded), "--seed", "1"]);
+    assert_eq!(
+        (file_seed, flag_seed, default_seed, override_seed),
+        (5, 5, 1, 1)
+    );
+    // The same noise from the file's seed as from --seed; another from the default seed.
+    assert_eq!(from_file, from_flag);
+    assert_ne!(from_file, from_default);
+    assert_eq!(overridden, from_default);
+}

@@ -29,6 +29,8 @@ pub struct Feasibility {
     pub rail_limited: usize,
     /// Commands outside the DAC's span.
     pub dac_limited: usize,
+    /// Samples at any of the three limits above, each sample counted once.
+    pub limited: usize,
     /// RMS of the difference between the amplifier's output and `gain *` the command, V: the
     /// lag of its bandwidth and slew limit.
     pub lag_rms_v: f64,
@@ -47,10 +49,9 @@ impl Feasibility {
         self.limited_samples() as f64 / self.samples as f64
     }
 
-    /// Samples at any limit: slew, rails or the DAC's span (a sample at two counts once per
-    /// limit; this is their sum, at most the samples).
+    /// Samples at any limit: slew, rails or the DAC's span (a sample at two counts once).
     pub fn limited_samples(&self) -> usize {
-        (self.slew_limited + self.rail_limited + self.dac_limited).min(self.samples)
+        self.limited
     }
 
     /// `true` when the amplifier delivers the command without reaching a limit.
@@ -117,6 +118,7 @@ pub fn feasibility_held(
         slew_limited: 0,
         rail_limited: 0,
         dac_limited: 0,
+        limited: 0,
         lag_rms_v: 0.0,
         lag_max_v: 0.0,
         swing_v: 0.0,
@@ -125,9 +127,11 @@ pub fn feasibility_held(
     let mut previous = held;
     let mut sum = 0.0;
     for &command in command_v {
+        let mut dac_clamped = false;
         if command.is_finite() {
             let (v, clamped) = dac.quantise(command);
             held = v;
+            dac_clamped = clamped;
             report.dac_limited += usize::from(clamped);
         }
         report.peak_slew_v_per_s = report
@@ -137,6 +141,7 @@ pub fn feasibility_held(
         let (out, rail, slewing) = amplifier.step_limits(held);
         report.rail_limited += usize::from(rail);
         report.slew_limited += usize::from(slewing);
+        report.limited += usize::from(dac_clamped || rail || slewing);
         let wanted =
             (gain * held).clamp(config.amplifier.output_min_v, config.amplifier.output_max_v);
         let lag = (out - wanted).abs();

@@ -46,6 +46,9 @@ pub struct ClampCounts {
     /// (`peak_current / load_capacitance`) for the whole sample: the drive asked for a faster
     /// change than the amplifier can deliver into the stack.
     pub slew_limited: u64,
+    /// Samples at any of the drive's limits above (DAC span, rails, slew), each sample counted
+    /// once however many it reached.
+    pub limited: u64,
     /// NaN or infinite commands (the DAC held its previous value).
     pub non_finite: u64,
     /// Sensor readings outside the ADC's span (the measured position saturated at the end of
@@ -210,9 +213,11 @@ impl Stage {
 
     /// As [`Stage::step`], returning every intermediate signal.
     pub fn step_detailed(&mut self, command_v: f64) -> StageSample {
+        let mut dac_clamped = false;
         if command_v.is_finite() {
             let (dac_v, clamped) = self.dac.quantise(command_v);
             self.dac_v = dac_v;
+            dac_clamped = clamped;
             self.clamps.dac_clamped += u64::from(clamped);
         } else {
             self.clamps.non_finite += 1;
@@ -220,6 +225,7 @@ impl Stage {
         let (amplifier_v, clamped, slewing) = self.amplifier.step_limits(self.dac_v);
         self.clamps.amplifier_clamped += u64::from(clamped);
         self.clamps.slew_limited += u64::from(slewing);
+        self.clamps.limited += u64::from(dac_clamped || clamped || slewing);
         let hysteresis_um = self.hysteresis.displacement_um(amplifier_v);
         let free_position_um = self.creep.step(hysteresis_um);
         let true_position_um = self.mechanics.step(free_position_um);
@@ -273,6 +279,7 @@ impl Stage {
             dac_clamped: self.clamps.dac_clamped - before.dac_clamped,
             amplifier_clamped: self.clamps.amplifier_clamped - before.amplifier_clamped,
             slew_limited: self.clamps.slew_limited - before.slew_limited,
+            limited: self.clamps.limited - before.limited,
             non_finite: self.clamps.non_finite - before.non_finite,
             adc_clamped: self.clamps.adc_clamped - before.adc_clamped,
         };

@@ -545,3 +545,75 @@ fn response_time_axis_follows_the_sample_rate() {
     }
     assert_eq!(stage.samples(), 20);
 }
+
+/// Commands that reach every drive limit: holds, jumps across the whole range (slew), values
+/// beyond the DAC's span and the rails, and NaN.
+fn commands_at_the_limits(rng: &mut ChaCha8Rng, n: usize) -> Vec<f64> {
+    let mut x = 0.0;
+    (0..n)
+        .map(|_| {
+            let u = rng.random::<f64>();
+            x = if u < 0.02 {
+                f64::NAN
+            } else if u < 0.1 {
+                // Jump anywhere in -15..15 V: beyond the DAC's +-10 V and, amplified, the rails.
+                30.0 * rng.random::<f64>() - 15.0
+            } else if u < 0.6 {
+                x
+            } else {
+                let step = 0.2 * (rng.random::<f64>() - 0.5);
+                if x.is_finite() { x + step } else { step }
+            };
+            x
+        })
+        .collect()
+}
+
+#[test]
+fn each_sample_at_a_drive_limit_counts_once_and_the_prediction_agrees_with_the_stage() {
+    // Reference: step the stage sample by sample and count the samples in which any of the
+    // DAC, rail or slew counters rose.
+    let mut rng = ChaCha8Rng::seed_from_u64(41);
+    let config = StageConfig::default();
+    let mut several = 0;
+    for case in 0..12 {
+        let commands = commands_at_the_limits(&mut rng, 2_000 + 500 * case);
+        let mut stage = Stage::new(&config, case as u64).unwrap();
+        let mut reference = 0u64;
+        let mut at_two = 0u64;
+        for &c in &commands {
+            let before = stage.clamps();
+            stage.step(c);
+            let after = stage.clamps();
+            let rose = [
+                after.dac_clamped > before.dac_clamped,
+                after.amplifier_clamped > before.amplifier_clamped,
+                after.slew_limited > before.slew_limited,
+            ];
+            let n = rose.iter().filter(|&&r| r).count() as u64;
+            reference += u64::from(n > 0);
+            at_two += u64::from(n > 1);
+            assert_eq!(
+                after.limited - before.limited,
+                u64::from(n > 0),
+                "case {case}: a sample counts once"
+            );
+        }
+        assert_eq!(stage.clamps().limited, reference, "case {case}");
+        several += u64::from(at_two > 0);
+        // The whole-signal run and the prediction from the command alone count the same.
+        let response = simulate(&config, case as u64, &commands).unwrap();
+        assert_eq!(response.clamps.limited, reference, "case {case}");
+        let predicted = hystcomp_stage::feasibility(&config, &commands).unwrap();
+        assert_eq!(predicted.limited_samples() as u64, reference, "case {case}");
+        assert_eq!(predicted.slew_limited as u64, response.clamps.slew_limited);
+        assert_eq!(
+            predicted.rail_limited as u64,
+            response.clamps.amplifier_clamped
+        );
+        assert_eq!(predicted.dac_limited as u64, response.clamps.dac_clamped);
+        assert!(predicted.limited_share() <= 1.0);
+    }
+    // The property means something only if some samples reach two limits at once.
+    assert!(several > 0, "no case reached two limits in one sample");
+}

@@ -150,17 +150,17 @@ fn summary(
             "amplifier": response.clamps.amplifier_clamped,
             "slew_limited": response.clamps.slew_limited,
             "adc": response.clamps.adc_clamped,
+            "any_drive_limit": response.clamps.limited,
         },
         "limited_share": limited_share(response),
     })
 }
 
 /// Share of the samples at the amplifier's slew limit or its rails (or beyond the DAC's span),
-/// 0..1 (a sample at two limits counts once per limit; the sum is capped at all of them).
+/// 0..1 (a sample at two limits counts once).
 fn limited_share(response: &hystcomp_stage::StageResponse) -> f64 {
     let samples = response.command_v.len().max(1) as u64;
-    let c = &response.clamps;
-    (c.slew_limited + c.amplifier_clamped + c.dac_clamped).min(samples) as f64 / samples as f64
+    response.clamps.limited.min(samples) as f64 / samples as f64
 }
 
 /// Runs `hystcomp simulate`.
