@@ -196,6 +196,17 @@ fn identify_compensate_and_crossval_take_the_full_model() {
     // For people: the links and their contributions.
     let text = hystcomp(&identify_args(&data, &plant, &from, &to)[1..]);
     assert!(stdout(&text).contains("+ vibration"), "{}", stdout(&text));
+    // --dynamics adds the vibration link with the creep link: the same model as
+    // --model-structure full.
+    let flagged = dir.path().join("flagged.json");
+    let mut args = identify_args(&data, &flagged, &from, &to);
+    let at = args.iter().position(|a| *a == "--model-structure").unwrap();
+    args.splice(at..at + 2, ["--dynamics"]);
+    let out = hystcomp(&args);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let flagged = ModelFile::load(&flagged).unwrap();
+    assert_eq!(flagged.creep, model.creep);
+    assert_eq!(flagged.vibration, model.vibration);
 
     // compensate: the paper's trajectory at the model's rate, checked against the amplifier.
     let desired = dir.path().join("desired.csv");
@@ -242,6 +253,43 @@ fn identify_compensate_and_crossval_take_the_full_model() {
     )
     .unwrap();
     assert!(indices.e_rms_percent < 0.6, "{indices:?}");
+    // A shorter preview than the default: the drive still has one row per desired sample,
+    // within the limits, and tracks (the vibration inverse cut shorter).
+    let short = dir.path().join("short.csv");
+    let out = hystcomp(&[
+        "--json",
+        "compensate",
+        "--model",
+        s(&plant),
+        "--method",
+        "ihc",
+        "--desired",
+        s(&desired),
+        "--stage",
+        s(&stage),
+        "--limits",
+        "0:10",
+        "--preview",
+        "8",
+        "-o",
+        s(&short),
+    ]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let report: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert_eq!(report["preview"], 8, "{report}");
+    let short_v = drive_column(&short);
+    assert_eq!(short_v.len(), trajectory.len());
+    assert!(short_v.iter().all(|v| (0.0..=10.0).contains(v)));
+    assert_ne!(short_v, drive_v);
+    let measured = simulate(&config, 2, &short_v).unwrap().measured_position_um;
+    let last = trajectory.len() / 2..trajectory.len();
+    let short_indices = hystcomp_experiments::TrackingIndices::compute(
+        &trajectory[last.clone()],
+        &measured[last],
+        100,
+    )
+    .unwrap();
+    assert!(short_indices.e_rms_percent < 1.0, "{short_indices:?}");
     // A trajectory at another rate is refused: the vibration link is discrete.
     let wrong = dir.path().join("wrong.csv");
     let mut text = String::from("time_s,desired_um\n");
