@@ -334,3 +334,96 @@ fn a_bank_from_models_in_memory_equals_one_from_the_set() {
         hystcomp_compensator_free(single);
     }
 }
+
+#[test]
+fn a_dihc_bank_equals_its_channels_own_compensators_bit_for_bit() {
+    // Table 2's inverse model on three channels, each with its own limits and desired
+    // positions (beyond the model's range now and then, NaN now and then).
+    let inverse = model_path("table2-inverse.json");
+    let dihc = CString::new("dihc").unwrap();
+    let limits = [(0.0, 10.0), (1.0, 9.0), (0.5, 8.0)];
+    let flat: Vec<f64> = limits.iter().flat_map(|&(a, b)| [a, b]).collect();
+    let mut model = null_mut();
+    let mut bank = null_mut();
+    // SAFETY: valid strings, three live model handles, three limit pairs, valid out-parameters.
+    unsafe {
+        assert_eq!(hystcomp_model_load(inverse.as_ptr(), &mut model), OK);
+        let models = [model as *const HystcompModel; 3];
+        assert_eq!(
+            hystcomp_bank_from_models(
+                models.as_ptr(),
+                3,
+                dihc.as_ptr(),
+                flat.as_ptr(),
+                3,
+                0,
+                &mut bank
+            ),
+            OK,
+            "{}",
+            last_error()
+        );
+        hystcomp_model_free(model);
+    }
+    let singles: Vec<_> = limits
+        .iter()
+        .map(|&(lo, hi)| {
+            let mut h = null_mut();
+            // SAFETY: valid strings and out-parameter.
+            let status = unsafe {
+                hystcomp_compensator_from_model_file(
+                    inverse.as_ptr(),
+                    dihc.as_ptr(),
+                    lo,
+                    hi,
+                    1,
+                    &mut h,
+                )
+            };
+            assert_eq!(status, OK, "{}", last_error());
+            h
+        })
+        .collect();
+    for k in 0..600 {
+        let d = tick(k);
+        let mut v = [0.0; 3];
+        // SAFETY: live handles, three doubles each, out-parameters.
+        unsafe {
+            let status = hystcomp_bank_step(bank, d.as_ptr(), v.as_mut_ptr(), 3);
+            let finite = d.iter().all(|x| x.is_finite());
+            assert_eq!(status, if finite { OK } else { NON_FINITE_INPUT });
+            for c in 0..3 {
+                let mut expected = 0.0;
+                hystcomp_compensator_step(singles[c], d[c], &mut expected);
+                assert_eq!(v[c].to_bits(), expected.to_bits(), "tick {k} channel {c}");
+                assert!(v[c] >= limits[c].0 && v[c] <= limits[c].1);
+            }
+        }
+    }
+    let mut clamped = 0;
+    for (c, &single) in singles.iter().enumerate() {
+        let (mut sat, mut loop_sat, mut nonfinite) = (0u64, 0u64, 0u64);
+        let (mut esat, mut enonfinite) = (0u64, 0u64);
+        // SAFETY: live handles and out-parameters.
+        unsafe {
+            assert_eq!(
+                hystcomp_bank_diagnostics(bank, c, &mut sat, &mut loop_sat, &mut nonfinite),
+                OK
+            );
+            hystcomp_compensator_diagnostics(single, &mut esat, &mut enonfinite);
+        }
+        assert_eq!((sat, nonfinite), (esat, enonfinite), "channel {c}");
+        assert_eq!(loop_sat, 0, "DIHC has no loop");
+        assert!(nonfinite > 0);
+        clamped += sat;
+    }
+    // The limits were reached: the comparison covered the clamps.
+    assert!(clamped > 0);
+    // SAFETY: live handles, freed once.
+    unsafe {
+        hystcomp_bank_free(bank);
+        for s in singles {
+            hystcomp_compensator_free(s);
+        }
+    }
+}
