@@ -104,15 +104,27 @@ fn real_array(
     Ok((values, shape))
 }
 
-/// Refuses a NaN or infinite value, naming its sample and channel.
+/// Refuses a NaN, an infinity or a magnitude beyond [`crate::arrays::MAX_MAGNITUDE`] (as
+/// ``Compensator`` does), naming its sample and channel.
 fn check_finite(values: &[f64], channels: usize, name: &str) -> PyResult<()> {
-    if let Some(k) = values.iter().position(|x| !x.is_finite()) {
+    let bound = crate::arrays::MAX_MAGNITUDE;
+    if let Some(k) = values
+        .iter()
+        .position(|x| !x.is_finite() || x.abs() > bound)
+    {
+        let what = if values[k].is_finite() {
+            format!(
+                "{:e}, beyond the {bound:e} a desired position may be",
+                values[k]
+            )
+        } else {
+            format!("{}", values[k])
+        };
         return Err(invalid(format!(
-            "{name} at sample {}, channel {} is {}; give finite desired positions (the bank's \
-             state is unchanged)",
+            "{name} at sample {}, channel {} is {what}; give finite desired positions (the \
+             bank's state is unchanged)",
             k / channels.max(1),
             k % channels.max(1),
-            values[k]
         )));
     }
     Ok(())
@@ -133,8 +145,8 @@ fn check_finite(values: &[f64], channels: usize, name: &str) -> PyResult<()> {
 ///
 /// ``step(y_d)`` takes an array of shape ``(channels,)``, ``process(y_d)`` one of shape
 /// ``(samples, channels)``; both return arrays of the same shape, every drive within its
-/// channel's limits. NaN or infinite desired positions are refused with ``InvalidValueError``
-/// naming the sample and channel (state unchanged). A channel that cannot be built raises the
+/// channel's limits. NaN, infinite and beyond-1e15 desired positions are refused with
+/// ``InvalidValueError`` naming the sample and channel (state unchanged). A channel that cannot be built raises the
 /// error ``Compensator`` would, its message beginning ``channel K (NAME): ``.
 #[pyclass(module = "hystcomp", name = "CompensatorBank", subclass, frozen)]
 pub struct CompensatorBank {

@@ -74,11 +74,23 @@ def test_a_list_of_models_makes_a_bank():
 
 def test_bad_input_is_refused_with_the_reason():
     bank = hystcomp.CompensatorBank(SET_FILE)
+    twin = hystcomp.CompensatorBank(SET_FILE)
     before = bank.step([10.0, 10.0, 10.0])
+    np.testing.assert_array_equal(twin.step([10.0, 10.0, 10.0]), before)
     bad = DESIRED.copy()
     bad[7, 2] = np.nan
     with pytest.raises(hystcomp.InvalidValueError, match="sample 7, channel 2"):
         bank.process(bad)
+    # As Compensator: infinities and magnitudes beyond 1e15 are refused too, naming the place.
+    for value, fragment in [(np.inf, "is inf"), (-2e15, "beyond the 1e15")]:
+        bad = DESIRED.copy()
+        bad[3, 1] = value
+        with pytest.raises(hystcomp.InvalidValueError, match="sample 3, channel 1"):
+            bank.process(bad)
+        with pytest.raises(hystcomp.InvalidValueError, match=fragment):
+            bank.step([10.0, value, 10.0])
+        with pytest.raises(hystcomp.InvalidValueError, match="not finite|is beyond"):
+            hystcomp.Compensator(TABLE1_FILE).step(value)
     with pytest.raises(hystcomp.InvalidValueError, match="3 channels"):
         bank.step([1.0, 2.0])
     with pytest.raises(hystcomp.InvalidValueError, match="columns"):
@@ -87,7 +99,8 @@ def test_bad_input_is_refused_with_the_reason():
         bank.process(DESIRED[:, 0])
     with pytest.raises(TypeError, match="real numbers"):
         bank.step(np.array([1j, 2j, 3j]))
-    # The state is unchanged by the refusals.
+    # The state is unchanged by the refusals: the next step is its twin's, which saw none.
+    np.testing.assert_array_equal(bank.step([12.0, 11.0, 9.0]), twin.step([12.0, 11.0, 9.0]))
     bank.reset()
     assert np.array_equal(bank.step([10.0, 10.0, 10.0]), before)
     with pytest.raises(hystcomp.WrongDirectionError, match=r"^channel 0 \(x\): "):

@@ -293,8 +293,8 @@ class CompensatorBank:
 
     ``step(y_d)`` takes an array of shape ``(channels,)``, ``process(y_d)`` one of shape
     ``(samples, channels)``; both return arrays of the same shape, every drive within its
-    channel's limits. NaN or infinite desired positions are refused with ``InvalidValueError``
-    naming the sample and channel (state unchanged). A channel that cannot be built raises the
+    channel's limits. NaN, infinite and beyond-1e15 desired positions are refused with
+    ``InvalidValueError`` naming the sample and channel (state unchanged). A channel that cannot be built raises the
     error ``Compensator`` would, its message beginning ``channel K (NAME): ``."""
 
     def __init__(
