@@ -367,17 +367,26 @@ impl<T: Real, B: Buffer<T>> VibrationInverse<T, B> {
                 T::zero()
             });
         }
+        // Every read and write below goes through `get`/`get_mut` or an iterator: the head and
+        // the taps' start are always within the ring (`settle` and the wrap below keep them
+        // so), and a microcontroller's per-sample path then has no bounds check that could
+        // panic (`examples/thumbv7em` checks it).
         let len = self.ring.as_ref().len();
-        let newest = (self.head + len - 1) % len;
+        let newest = if self.head == 0 {
+            len.wrapping_sub(1)
+        } else {
+            self.head - 1
+        };
         let desired = if desired.is_finite() {
             desired
         } else {
-            self.ring.as_ref()[newest]
+            self.ring.as_ref().get(newest).copied().unwrap_or(desired)
         };
         // The oldest slot becomes the newest sample.
-        let ring = self.ring.as_mut();
-        ring[self.head] = desired;
-        self.head = if self.head + 1 == len {
+        if let Some(slot) = self.ring.as_mut().get_mut(self.head) {
+            *slot = desired;
+        }
+        self.head = if self.head + 1 >= len {
             0
         } else {
             self.head + 1
@@ -390,17 +399,14 @@ impl<T: Real, B: Buffer<T>> VibrationInverse<T, B> {
         }
         let ring = self.ring.as_ref();
         for q in self.taps.as_ref() {
-            u = u + *q * ring[index];
+            u = u + *q * ring.get(index).copied().unwrap_or(T::zero());
             index += 1;
             if index == len {
                 index = 0;
             }
         }
         // b0 B_s x = A u.
-        let us = self.u.as_mut();
-        let nu = us.len();
-        us.copy_within(0..nu - 1, 1);
-        us[0] = u;
+        push_front(self.u.as_mut(), u);
         let mut acc = T::zero();
         for (a, u) in self.a.as_ref().iter().zip(self.u.as_ref()) {
             acc = acc + *a * *u;
@@ -410,12 +416,7 @@ impl<T: Real, B: Buffer<T>> VibrationInverse<T, B> {
             feedback = feedback + *s * *x;
         }
         let x = acc / self.b0 - feedback;
-        let xs = self.x.as_mut();
-        if !xs.is_empty() {
-            let n = xs.len();
-            xs.copy_within(0..n - 1, 1);
-            xs[0] = x;
-        }
+        push_front(self.x.as_mut(), x);
         x
     }
 
@@ -574,4 +575,14 @@ fn real_product(zeros: &[Complex]) -> [f64; MAX_DEGREE + 1] {
         *o = z.re;
     }
     out
+}
+
+/// Moves every value of `values` one place towards the end (the last one drops out) and puts
+/// `value` first; nothing for an empty slice. Moves only, without a path to a panic.
+#[inline]
+fn push_front<T: Copy>(values: &mut [T], value: T) {
+    let mut carry = value;
+    for v in values.iter_mut() {
+        carry = core::mem::replace(v, carry);
+    }
 }

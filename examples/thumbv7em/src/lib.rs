@@ -9,13 +9,17 @@
 //! [`SixAxes`] is a bank of six IHC channels (a six-axis stage, issue 16) with its storage
 //! fixed at compile time ([`hystcomp_core::Fixed`]); [`BANK_RAM_BYTES`] is its RAM and that of
 //! the DIHC bank of the same size.
+//!
+//! [`Chain`] is the full pipeline's streaming compensator (issue 11): a vibration inverse with
+//! a preview, a creep inverse and the IHC, every link's arrays in [`Bounded`] storage.
 #![no_std]
 
 use core::mem::size_of;
 
 use hystcomp_core::{
-    BankError, Compensator, CompensatorBank, CoreError, Dihc, DihcBank, Fixed, Ihc, IhcBank, Mpim,
-    OutputLimits, PLAIN_DEGREE, SolveMode, Wihc, dihc_bank_rows, paper, plant_bank_rows,
+    BankError, Bounded, ChainCompensator, Compensator, CompensatorBank, CoreError, CreepInverse,
+    Dihc, DihcBank, Fixed, Ihc, IhcBank, Mpim, OutputLimits, PLAIN_DEGREE, SolveMode,
+    VibrationInverse, Wihc, dihc_bank_rows, paper, plant_bank_rows,
 };
 
 /// Ten play operators, as in the paper.
@@ -123,6 +127,41 @@ pub fn hystcomp_wihc_step(c: &mut Wihc<f32, [f32; N]>, desired: f32) -> f32 {
 #[inline(never)]
 #[unsafe(no_mangle)]
 pub fn hystcomp_dihc_step(c: &mut Dihc<f32, [f32; N]>, desired: f32) -> f32 {
+    c.step(desired)
+}
+
+/// The most values of one array of the chain's links (creep elements, filter coefficients, the
+/// preview ring of [`CHAIN_PREVIEW`] + 1 samples).
+pub const CHAIN_CAPACITY: usize = 48;
+
+/// The chain's preview, samples (its output lags its input by this many).
+pub const CHAIN_PREVIEW: usize = 40;
+
+/// The full pipeline's compensator on a microcontroller: vibration inverse, creep inverse and
+/// the exact IHC of Table 1, no allocator.
+pub type Chain = ChainCompensator<f32, Bounded<f32, CHAIN_CAPACITY>, Ihc<f32, [f32; N]>>;
+
+/// A chain at 10 kHz with illustrative links (not identified from a stage): creep elements at
+/// 0.1, 1 and 10 s of weight 0.01 each, and a unit-gain resonance at 800 Hz (poles at radius
+/// 0.98) with a zero inside the unit circle and one sample of delay.
+pub fn chain() -> Result<Chain, CoreError> {
+    let plant: Mpim<f32, [f32; N]> = paper::TABLE1.model()?;
+    let ihc = Ihc::new(&plant, OutputLimits::new(0.0, 1.0)?, SolveMode::Exact)?;
+    let period_s = 1e-4;
+    let creep = CreepInverse::new(&[0.1, 1.0, 10.0], &[0.01, 0.01, 0.01], 0.0, period_s)?;
+    // 1 - 2 r cos(theta) z^-1 + r^2 z^-2, r = 0.98, theta = 2 pi 800 / 10 000.
+    let denominator = [1.0, -1.717_542_7, 0.960_4];
+    let gain: f32 = denominator.iter().sum();
+    let numerator = [0.7 * gain, 0.3 * gain];
+    let vibration = VibrationInverse::new(&numerator, &denominator, 1, CHAIN_PREVIEW)?;
+    Ok(ChainCompensator::new(Some(vibration), Some(creep), ihc))
+}
+
+/// One sample of the chain: the drive for the desired position [`CHAIN_PREVIEW`] samples
+/// ago.
+#[inline(never)]
+#[unsafe(no_mangle)]
+pub fn hystcomp_chain_step(c: &mut Chain, desired: f32) -> f32 {
     c.step(desired)
 }
 

@@ -1,5 +1,6 @@
-//! The firmware image: builds the three compensators without an allocator and runs them on a
-//! trajectory forever, writing each output to a volatile location as a DAC register would be.
+//! The firmware image: builds the three compensators, the six-axis bank and the chain without an
+//! allocator and runs them on a trajectory forever, writing each output to a volatile location
+//! as a DAC register would be.
 #![no_std]
 #![no_main]
 
@@ -7,8 +8,8 @@ use core::panic::PanicInfo;
 use core::ptr::{addr_of_mut, write_volatile};
 
 use hystcomp_thumbv7em_example::{
-    AXES, BANK_RAM_BYTES, Compensators, RAM_BYTES, desired, hystcomp_dihc_step,
-    hystcomp_ihc_bank_step, hystcomp_ihc_step, hystcomp_wihc_step, six_axes,
+    AXES, BANK_RAM_BYTES, Compensators, RAM_BYTES, chain, desired, hystcomp_chain_step,
+    hystcomp_dihc_step, hystcomp_ihc_bank_step, hystcomp_ihc_step, hystcomp_wihc_step, six_axes,
 };
 
 /// The RAM table, kept in the image so that the host test can read the target's own numbers.
@@ -29,8 +30,8 @@ pub static HYSTCOMP_RAM_BYTES: [u32; 8] = {
 #[unsafe(no_mangle)]
 pub static HYSTCOMP_BANK_RAM_BYTES: [u32; 2] = [BANK_RAM_BYTES[0] as u32, BANK_RAM_BYTES[1] as u32];
 
-/// Stands in for three DAC registers.
-static mut DAC: [f32; 3] = [0.0; 3];
+/// Stands in for four DAC registers (IHC, WIHC, DIHC, the chain).
+static mut DAC: [f32; 4] = [0.0; 4];
 
 /// Stands in for the six axes' DAC registers.
 static mut AXES_DAC: [f32; AXES] = [0.0; AXES];
@@ -42,6 +43,7 @@ pub extern "C" fn _start() -> ! {
         halt()
     };
     let Ok(mut bank) = six_axes() else { halt() };
+    let Ok(mut full) = chain() else { halt() };
     let dac = addr_of_mut!(DAC).cast::<f32>();
     let axes_dac = addr_of_mut!(AXES_DAC).cast::<f32>();
     let mut k: u32 = 0;
@@ -59,11 +61,12 @@ pub extern "C" fn _start() -> ! {
             // SAFETY: `axes_dac` points to the six floats of `AXES_DAC`, written only here.
             unsafe { write_volatile(axes_dac.add(c), *v) };
         }
-        // SAFETY: `dac` points to the three floats of `DAC`, written only here (one thread).
+        // SAFETY: `dac` points to the four floats of `DAC`, written only here (one thread).
         unsafe {
             write_volatile(dac, hystcomp_ihc_step(&mut c.ihc, y_d));
             write_volatile(dac.add(1), hystcomp_wihc_step(&mut c.wihc, y_d));
             write_volatile(dac.add(2), hystcomp_dihc_step(&mut c.dihc, y_d));
+            write_volatile(dac.add(3), hystcomp_chain_step(&mut full, y_d));
         }
         k = k.wrapping_add(1);
     }
