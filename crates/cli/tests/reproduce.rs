@@ -54,11 +54,11 @@ fn reproduce_prints_table3_writes_the_report_and_honours_json() {
     // numbers in --json.
     let beyond = &json["beyond"];
     assert_eq!(beyond["full"]["runs"].as_array().unwrap().len(), 3);
-    assert_eq!(beyond["duration"]["series"].as_array().unwrap().len(), 4);
-    assert_eq!(beyond["duration"]["hold"].as_array().unwrap().len(), 4);
+    assert_eq!(beyond["duration"]["series"].as_array().unwrap().len(), 5);
+    assert_eq!(beyond["duration"]["hold"].as_array().unwrap().len(), 5);
     assert_eq!(beyond["speed"]["paper"].as_array().unwrap().len(), 7);
     assert_eq!(beyond["speed"]["raster"].as_array().unwrap().len(), 5);
-    assert_eq!(beyond["checks"].as_array().unwrap().len(), 10);
+    assert_eq!(beyond["checks"].as_array().unwrap().len(), 12);
     let html = std::fs::read_to_string(out.join("index.html")).unwrap();
     for id in [
         "full-pipeline",
