@@ -7,10 +7,12 @@
 //! - [`atomic`]: files written atomically (temporary file, then rename);
 //! - [`bounded`]: files read with a bound on their size, checked while reading;
 //! - [`compensator`]: a compensator built from a model file, in physical units;
-//! - [`bank`]: model sets (many channels' models) and the compensator bank built from one.
+//! - `bank` (feature `bank`, on by default): model sets (many channels' models) and the
+//!   compensator bank built from one.
 
 pub mod atomic;
 pub mod band_limit;
+#[cfg(feature = "bank")]
 pub mod bank;
 pub mod bounded;
 pub mod compensator;
