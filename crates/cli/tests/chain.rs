@@ -216,80 +216,54 @@ fn identify_compensate_and_crossval_take_the_full_model() {
         text.push_str(&format!("{},{y}\n", k as f64 / RATE));
     }
     std::fs::write(&desired, text).unwrap();
-    let drive = dir.path().join("drive.csv");
-    let out = hystcomp(&[
-        "--json",
-        "compensate",
-        "--model",
-        s(&plant),
-        "--method",
-        "ihc",
-        "--desired",
-        s(&desired),
-        "--stage",
-        s(&stage),
-        "--limits",
-        "0:10",
-        "-o",
-        s(&drive),
-    ]);
-    assert!(out.status.success(), "{}", stderr(&out));
-    let report: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    // The drive (IHC, limits 0-10 V, `extra` options), its report, and its e_rms on the stage
+    // over the second half of the trajectory.
+    let compensate = |name: &str, extra: &[&str]| {
+        let drive = dir.path().join(name);
+        let mut args = vec![
+            "--json",
+            "compensate",
+            "--model",
+            s(&plant),
+            "--method",
+            "ihc",
+            "--desired",
+            s(&desired),
+            "--stage",
+            s(&stage),
+            "--limits",
+            "0:10",
+            "-o",
+            s(&drive),
+        ];
+        args.extend_from_slice(extra);
+        let out = hystcomp(&args);
+        assert!(out.status.success(), "{}", stderr(&out));
+        let report: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+        let drive_v = drive_column(&drive);
+        assert_eq!(drive_v.len(), trajectory.len());
+        assert!(drive_v.iter().all(|v| (0.0..=10.0).contains(v)));
+        let measured = simulate(&config, 2, &drive_v).unwrap().measured_position_um;
+        let last = trajectory.len() / 2..trajectory.len();
+        let indices = hystcomp_experiments::TrackingIndices::compute(
+            &trajectory[last.clone()],
+            &measured[last],
+            100,
+        )
+        .unwrap();
+        (drive_v, report, indices.e_rms_percent)
+    };
+    let (drive_v, report, e_rms) = compensate("drive.csv", &[]);
     // Only the start from rest to the trajectory's first 60 um is slew-limited.
     let limited = report["feasibility"]["slew_limited"].as_u64().unwrap();
     assert!(limited < 40, "{report}");
-    let drive_v: Vec<f64> = std::fs::read_to_string(&drive)
-        .unwrap()
-        .lines()
-        .skip(1)
-        .map(|l| l.split(',').nth(1).unwrap().parse().unwrap())
-        .collect();
-    let measured = simulate(&config, 2, &drive_v).unwrap().measured_position_um;
-    let last = trajectory.len() / 2..trajectory.len();
-    let indices = hystcomp_experiments::TrackingIndices::compute(
-        &trajectory[last.clone()],
-        &measured[last],
-        100,
-    )
-    .unwrap();
-    assert!(indices.e_rms_percent < 0.6, "{indices:?}");
-    // A shorter preview than the default: the drive still has one row per desired sample,
-    // within the limits, and tracks (the vibration inverse cut shorter).
-    let short = dir.path().join("short.csv");
-    let out = hystcomp(&[
-        "--json",
-        "compensate",
-        "--model",
-        s(&plant),
-        "--method",
-        "ihc",
-        "--desired",
-        s(&desired),
-        "--stage",
-        s(&stage),
-        "--limits",
-        "0:10",
-        "--preview",
-        "8",
-        "-o",
-        s(&short),
-    ]);
-    assert!(out.status.success(), "{}", stderr(&out));
-    let report: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert!(e_rms < 0.6, "{e_rms}");
+    // A shorter preview than the default: still one drive row per desired sample, within the
+    // limits, tracking (the vibration inverse cut shorter).
+    let (short_v, report, short_e_rms) = compensate("short.csv", &["--preview", "8"]);
     assert_eq!(report["preview"], 8, "{report}");
-    let short_v = drive_column(&short);
-    assert_eq!(short_v.len(), trajectory.len());
-    assert!(short_v.iter().all(|v| (0.0..=10.0).contains(v)));
     assert_ne!(short_v, drive_v);
-    let measured = simulate(&config, 2, &short_v).unwrap().measured_position_um;
-    let last = trajectory.len() / 2..trajectory.len();
-    let short_indices = hystcomp_experiments::TrackingIndices::compute(
-        &trajectory[last.clone()],
-        &measured[last],
-        100,
-    )
-    .unwrap();
-    assert!(short_indices.e_rms_percent < 1.0, "{short_indices:?}");
+    assert!(short_e_rms < 1.0, "{short_e_rms}");
     // A trajectory at another rate is refused: the vibration link is discrete.
     let wrong = dir.path().join("wrong.csv");
     let mut text = String::from("time_s,desired_um\n");
