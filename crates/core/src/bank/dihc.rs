@@ -233,13 +233,11 @@ impl DihcKernel {
 }
 
 impl<T: Real, const W: usize> BlockKernel<T, W> for DihcKernel {
+    const HEAD: usize = InverseRows::HEAD;
+    const COUNTS: usize = InverseRows::COUNTS;
+
     #[inline(always)]
     fn step(&self, block: &mut Block<'_, T, W>, desired: L<T, W>) -> L<T, W> {
-        if !block.holds(InverseRows::HEAD, InverseRows::COUNTS) {
-            // Never: every block of the storage holds its layout's rows (`Block::get` would
-            // read zeros).
-            return Lanes::zero();
-        }
         let first = self.rows.coefficient(0);
         if self.cubic || all_odd_cubic(block, InverseRows::ODD_CUBIC) {
             let remainder = cubic_lanes(block, first);

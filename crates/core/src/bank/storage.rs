@@ -335,8 +335,9 @@ pub(crate) struct Block<'a, T, const W: usize> {
 
 impl<T: Real, const W: usize> Block<'_, T, W> {
     /// Whether the block holds `head` rows of values and the count rows up to `counts`: a
-    /// kernel checks it once, so that the compiler drops the bounds checks of its reads of the
-    /// rows at fixed offsets before them (the layouts always hold them).
+    /// bank's loop checks it once per block (`super::run`), so that the compiler drops the
+    /// bounds checks of the step's reads of the rows at fixed offsets before them (the layouts
+    /// always hold them).
     #[inline(always)]
     pub fn holds(&self, head: usize, counts: usize) -> bool {
         self.values.len() >= head && self.counts.len() >= counts && self.counters.len() >= COUNTERS

@@ -340,13 +340,11 @@ impl PlantKernel<WihcMethod> {
 }
 
 impl<T: Real, const W: usize> BlockKernel<T, W> for PlantKernel<WihcMethod> {
+    const HEAD: usize = PlantRows::HEAD;
+    const COUNTS: usize = PlantRows::COUNTS;
+
     #[inline(always)]
     fn step(&self, block: &mut Block<'_, T, W>, desired: L<T, W>) -> L<T, W> {
-        if !block.holds(PlantRows::HEAD, PlantRows::COUNTS) {
-            // Never: every block of the storage holds its layout's rows (`Block::get` would
-            // read zeros).
-            return Lanes::zero();
-        }
         let first = self.rows.coefficient(0);
         if self.cubic || all_odd_cubic(block, PlantRows::ODD_CUBIC) {
             let remainder = cubic_lanes(block, first);
