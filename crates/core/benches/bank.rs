@@ -13,48 +13,17 @@
 use criterion::{BenchmarkId, Criterion, Throughput, criterion_group, criterion_main};
 use hystcomp_core::{
     CompensatorBank, DihcBank, Heap, IhcBank, Mpim, OutputLimits, Real, SolveMode, VectorPath,
-    WihcBank,
-    paper::{self, PublishedMpim},
-    with_vector_path,
+    WihcBank, paper, with_vector_path,
 };
 use std::hint::black_box;
 
+#[path = "common/bank_workload.rs"]
+mod bank_workload;
+use bank_workload::{channel_model, signal};
+
 /// Ticks per measured iteration.
 const TICKS: usize = 200;
-const OPERATORS: usize = 10;
 const CHANNELS: [usize; 5] = [1, 8, 64, 1_024, 4_096];
-
-/// `table` spread over [`OPERATORS`] operators, its weights scaled by `1 + 0.1 s`,
-/// `s` in [-1, 1] a function of the channel (every channel its own model).
-fn channel_model<T: Real>(table: &PublishedMpim, channel: usize) -> Mpim<T, Vec<T>> {
-    let base: Mpim<T, Vec<T>> = table.spread(OPERATORS).unwrap();
-    let s = ((channel as f64) * 0.618_034).fract() * 2.0 - 1.0;
-    let scale = T::from_f64(1.0 + 0.1 * s);
-    let weights: Vec<T> = base.weights().iter().map(|&b| b * scale).collect();
-    Mpim::new(base.thresholds(), &weights, base.a1(), base.a2()).unwrap()
-}
-
-/// `ticks x channels` desired positions (row-major): each channel the three-tone voltage of
-/// the single-channel benches at its own phase, run through its own plant (every sample
-/// reachable), after a smooth rise from rest over the first quarter.
-fn trajectory<T: Real>(plants: &[Mpim<T, Vec<T>>]) -> Vec<T> {
-    let channels = plants.len();
-    let mut out = vec![T::zero(); TICKS * channels];
-    for (c, plant) in plants.iter().enumerate() {
-        let mut p = plant.clone();
-        let phase = (c as f64) * 0.37;
-        for k in 0..TICKS {
-            let t = k as f64 / TICKS as f64 * 4.0;
-            let rise = 0.5 - 0.5 * (std::f64::consts::PI * t.min(1.0)).cos();
-            let v = 0.5
-                + 0.14 * (std::f64::consts::PI * t + 2.6 + phase).sin()
-                + 0.14 * (1.6 * std::f64::consts::PI * t + 3.0 + phase).sin()
-                + 0.2 * (2.0 * std::f64::consts::PI * t + 1.5 + phase).sin();
-            out[k * channels + c] = p.step(T::from_f64(rise * v));
-        }
-    }
-    out
-}
 
 /// The compilation `HYSTCOMP_BANK_PATH` names (the widest the processor has by default).
 fn path() -> VectorPath {
@@ -82,7 +51,7 @@ fn bench_type<T: Real>(c: &mut Criterion, type_name: &str) {
         let inverses: Vec<Mpim<T, Vec<T>>> = (0..channels)
             .map(|k| channel_model(&paper::TABLE2, k))
             .collect();
-        let desired = trajectory(&plants);
+        let desired = signal(&plants, TICKS);
         let mut control = vec![T::zero(); desired.len()];
         let mut banks: Vec<(&str, Box<dyn CompensatorBank<T>>)> = vec![
             (

@@ -121,7 +121,9 @@ struct Report {
 }
 
 /// `table` spread over [`OPERATORS`] operators, weights scaled by `1 + 0.1 s` for a channel's
-/// own `s` in [-1, 1].
+/// own `s` in [-1, 1]. The core's bank benches time the same channels and signal
+/// (`crates/core/benches/common/bank_workload.rs`, which a bench target cannot share with this
+/// crate's source): change both together.
 fn channel_model<T: Real>(
     table: &PublishedMpim,
     channel: usize,
