@@ -202,10 +202,8 @@ impl<T: Real, B: Buffer<T>> Vibration<T, B> {
             self.settle(if x.is_finite() { x } else { T::zero() });
         }
         let inputs = self.inputs.as_mut();
-        let len = inputs.len();
         let x = if x.is_finite() { x } else { inputs[0] };
-        inputs.copy_within(0..len - 1, 1);
-        inputs[0] = x;
+        push_front(inputs, x);
         let b = self.numerator.as_ref();
         let a = self.denominator.as_ref();
         let mut y = T::zero();
@@ -216,11 +214,7 @@ impl<T: Real, B: Buffer<T>> Vibration<T, B> {
         for (ai, yi) in a.iter().zip(outputs.iter()) {
             y = y - *ai * *yi;
         }
-        if !outputs.is_empty() {
-            let n = outputs.len();
-            outputs.copy_within(0..n - 1, 1);
-            outputs[0] = y;
-        }
+        push_front(outputs, y);
         y
     }
 }
@@ -552,10 +546,7 @@ impl Plan {
                 -acc / q[0]
             };
             f(n, value);
-            if nu > 0 {
-                recent.copy_within(0..nu - 1, 1);
-                recent[0] = value;
-            }
+            push_front(&mut recent[..nu], value);
         }
     }
 }

@@ -159,8 +159,7 @@ fn summary(
 /// Share of the samples at the amplifier's slew limit or its rails (or beyond the DAC's span),
 /// 0..1 (a sample at two limits counts once).
 fn limited_share(response: &hystcomp_stage::StageResponse) -> f64 {
-    let samples = response.command_v.len().max(1) as u64;
-    response.clamps.limited.min(samples) as f64 / samples as f64
+    response.clamps.limited as f64 / response.command_v.len().max(1) as f64
 }
 
 /// Runs `hystcomp simulate`.
