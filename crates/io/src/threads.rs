@@ -6,16 +6,29 @@
 //! gives channel `c` the same bits as the whole bank does; splitting at whole blocks of
 //! [`LANES`] channels keeps every part's blocks full.
 //!
-//! **Off by default: it was not shown to pay at the tick sizes of issue 16.** A tick of 1 024
-//! DIHC channels is about 5 us of work on one core, less than a fork and join of rayon's threads
-//! costs on this project's shared 2-core machine (wall time per channel-step 4.6 ns on one
-//! thread, 80 ns on two, load average 11-13). For 4 096 exact IHC channels two threads ran
-//! 2.5 times faster in wall time (193 -> 79 ns f32, 441 -> 125 ns f64), but under a load of
-//! 11-13 on 2 cores a process with two threads mostly gets a larger share of the machine, not
-//! parallel speed, so this is not evidence that it pays on a controller's own cores. Measure on
-//! the target machine (`ThreadedBank` against the plain bank, same channels, interleaved runs)
-//! before enabling it. [`ThreadedBank::process`] forks once for a whole signal (each part runs
-//! every tick of its channels); [`ThreadedBank::step`] forks once per tick.
+//! **Off by default: tick by tick, it does not pay at the tick sizes of issue 16.** Measured
+//! with `cargo bench -p hystcomp-io --features parallel --bench threads_probe` (the plain bank
+//! and a `ThreadedBank` of two parts, runs interleaved, wall time per channel-step, median of
+//! nine; the channels and signal of `hystcomp bench --channels`) on this project's shared
+//! 2-core Intel Xeon (AVX-512, load average 1.3-1.4 from other work):
+//!
+//! | bank | plain, by tick | threads, by tick | threads, whole signal |
+//! | --- | --- | --- | --- |
+//! | exact IHC f32, 4 096 channels | 13.6 ns | 23.2 ns (best run 16.3) | 7.2 ns |
+//! | exact IHC f64, 4 096 channels | 25.0 ns | 29.1 ns (25.3) | 11.4 ns |
+//! | delayed IHC f32, 4 096 channels | 7.5 ns | 16.7 ns (12.5) | 4.3 ns |
+//! | DIHC f32, 4 096 channels | 3.1 ns | 10.4 ns (8.5) | 3.3 ns (1.7) |
+//! | exact IHC f32, 1 024 channels | 14.1 ns | 39.7 ns (19.4) | 7.5 ns |
+//! | DIHC f32, 1 024 channels | 3.2 ns | 22.5 ns (16.8) | 2.1 ns |
+//!
+//! [`ThreadedBank::step`] forks and joins once per tick: a tick of 4 096 exact IHC channels is
+//! about 56 us of work, and the fork, the join and waiting for the slower of two threads on a
+//! machine that also runs other work cost more than the second core gives back, at every tick
+//! size measured. [`ThreadedBank::process`] forks once for a whole signal (each part runs every
+//! tick of its channels) and nearly halves the time of the heavier kernels (exact IHC 1.9x in
+//! f32, 2.2x in f64): it pays offline, for a known trajectory of many channels, not for a
+//! controller stepping tick by tick. Measure on the target machine (its own cores, a thread
+//! pool pinned and spinning rather than rayon's) before using it in a control loop.
 
 use std::ops::Range;
 
