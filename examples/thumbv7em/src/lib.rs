@@ -7,8 +7,8 @@
 //! compensator takes, for `n = 10` and `n = 100` operators.
 //!
 //! [`SixAxes`] is a bank of six IHC channels (a six-axis stage, issue 16) with its storage
-//! fixed at compile time ([`hystcomp_core::Fixed`]); [`BANK_RAM_BYTES`] is its RAM and that of
-//! the DIHC bank of the same size.
+//! fixed at compile time ([`hystcomp_core::Fixed`]), [`SixAxesWihc`] and [`SixAxesDihc`] the
+//! WIHC and DIHC banks of the same stage; [`BANK_RAM_BYTES`] is their RAM.
 //!
 //! [`Chain`] is the full pipeline's streaming compensator (issue 11): a vibration inverse with
 //! a preview, a creep inverse and the IHC, every link's arrays in [`Bounded`] storage.
@@ -19,7 +19,7 @@ use core::mem::size_of;
 use hystcomp_core::{
     BankError, Bounded, ChainCompensator, Compensator, CompensatorBank, CoreError, CreepInverse,
     Dihc, DihcBank, Fixed, Ihc, IhcBank, Mpim, OutputLimits, PLAIN_DEGREE, SolveMode,
-    VibrationInverse, Wihc, dihc_bank_rows, paper, plant_bank_rows,
+    VibrationInverse, Wihc, WihcBank, dihc_bank_rows, paper, plant_bank_rows,
 };
 
 /// Ten play operators, as in the paper.
@@ -76,26 +76,66 @@ const DIHC_ROWS: [usize; 3] = dihc_bank_rows(AXES, N, PLAIN_DEGREE, BANK_LANES);
 pub type SixAxes =
     IhcBank<f32, Fixed<{ IHC_ROWS[0] }, { IHC_ROWS[1] }, { IHC_ROWS[2] }>, BANK_LANES>;
 
+/// Six WIHC channels of ten operators in `f32` (the IHC bank's rows).
+pub type SixAxesWihc =
+    WihcBank<f32, Fixed<{ IHC_ROWS[0] }, { IHC_ROWS[1] }, { IHC_ROWS[2] }>, BANK_LANES>;
+
 /// Six DIHC channels of ten operators in `f32`.
 pub type SixAxesDihc =
     DihcBank<f32, Fixed<{ DIHC_ROWS[0] }, { DIHC_ROWS[1] }, { DIHC_ROWS[2] }>, BANK_LANES>;
 
-/// The RAM of the six-channel banks, bytes: `[IHC bank, DIHC bank]`.
-pub const BANK_RAM_BYTES: [usize; 2] = [size_of::<SixAxes>(), size_of::<SixAxesDihc>()];
+/// The RAM of the six-channel banks, bytes: `[IHC bank, WIHC bank, DIHC bank]`.
+pub const BANK_RAM_BYTES: [usize; 3] = [
+    size_of::<SixAxes>(),
+    size_of::<SixAxesWihc>(),
+    size_of::<SixAxesDihc>(),
+];
 
-/// The six-axis IHC bank from Table 1 (each axis its own copy of the model), outputs in
-/// `[0, 1]`.
-pub fn six_axes() -> Result<SixAxes, BankError> {
+/// Table 1 for each of the six axes (each its own copy).
+fn six_plants() -> Result<[Mpim<f32, [f32; N]>; AXES], CoreError> {
     let plant: Mpim<f32, [f32; N]> = paper::TABLE1.model()?;
-    let plants = [
+    Ok([
         plant.clone(),
         plant.clone(),
         plant.clone(),
         plant.clone(),
         plant.clone(),
         plant,
+    ])
+}
+
+/// The six-axis IHC bank from Table 1 (each axis its own copy of the model), outputs in
+/// `[0, 1]`.
+pub fn six_axes() -> Result<SixAxes, BankError> {
+    SixAxes::new(
+        &six_plants()?,
+        &[OutputLimits::new(0.0, 1.0)?],
+        SolveMode::Exact,
+    )
+}
+
+/// The six-axis WIHC bank from Table 1, outputs in `[0, 1]`.
+pub fn six_axes_wihc() -> Result<SixAxesWihc, BankError> {
+    SixAxesWihc::new(
+        &six_plants()?,
+        &[OutputLimits::new(0.0, 1.0)?],
+        SolveMode::Exact,
+    )
+}
+
+/// The six-axis DIHC bank from Table 2 (the inverse model on inputs `[0, 1]`), outputs in
+/// `[0, 1]`.
+pub fn six_axes_dihc() -> Result<SixAxesDihc, BankError> {
+    let inverse: Mpim<f32, [f32; N]> = paper::TABLE2.model()?;
+    let inverses = [
+        inverse.clone(),
+        inverse.clone(),
+        inverse.clone(),
+        inverse.clone(),
+        inverse.clone(),
+        inverse,
     ];
-    SixAxes::new(&plants, &[OutputLimits::new(0.0, 1.0)?], SolveMode::Exact)
+    SixAxesDihc::new(&inverses, &[(0.0, 1.0)], &[OutputLimits::new(0.0, 1.0)?])
 }
 
 /// One tick of the six-axis bank: `out[c]` for `desired[c]`.
@@ -103,6 +143,28 @@ pub fn six_axes() -> Result<SixAxes, BankError> {
 #[unsafe(no_mangle)]
 pub fn hystcomp_ihc_bank_step(
     bank: &mut SixAxes,
+    desired: &[f32; AXES],
+    out: &mut [f32; AXES],
+) -> bool {
+    bank.step(desired, out).is_ok()
+}
+
+/// One tick of the six-axis WIHC bank.
+#[inline(never)]
+#[unsafe(no_mangle)]
+pub fn hystcomp_wihc_bank_step(
+    bank: &mut SixAxesWihc,
+    desired: &[f32; AXES],
+    out: &mut [f32; AXES],
+) -> bool {
+    bank.step(desired, out).is_ok()
+}
+
+/// One tick of the six-axis DIHC bank.
+#[inline(never)]
+#[unsafe(no_mangle)]
+pub fn hystcomp_dihc_bank_step(
+    bank: &mut SixAxesDihc,
     desired: &[f32; AXES],
     out: &mut [f32; AXES],
 ) -> bool {

@@ -269,17 +269,29 @@ impl<T: Real, S: BankStorage<T, W>, const W: usize> Blocks<T, S, W> {
     #[inline(always)]
     pub fn blocks_mut(&mut self) -> impl Iterator<Item = Block<'_, T, W>> {
         let (v, c) = (self.value_rows.max(1), self.count_rows.max(1));
-        self.values
-            .as_mut()
-            .chunks_exact_mut(v)
-            .zip(self.counts.as_mut().chunks_exact_mut(c))
-            .zip(self.counters.as_mut().chunks_exact_mut(COUNTERS))
-            .map(|((values, counts), counters)| Block {
-                values,
-                counts,
-                counters,
+        let mut values = self.values.as_mut();
+        let mut counts = self.counts.as_mut();
+        let mut counters = self.counters.as_mut();
+        // Split off one block's rows at a time (as a zip of `chunks_exact_mut` would, stopping
+        // at the first array that runs short), without the division by the chunk length that
+        // such a zip makes when it is built: a compiler optimising for size may outline that
+        // constructor, and the division's panic path with it (the thumbv7em image with three
+        // banks did).
+        core::iter::from_fn(move || {
+            let (block_values, rest_values) =
+                core::mem::take(&mut values).split_at_mut_checked(v)?;
+            let (block_counts, rest_counts) =
+                core::mem::take(&mut counts).split_at_mut_checked(c)?;
+            let (block_counters, rest_counters) =
+                core::mem::take(&mut counters).split_at_mut_checked(COUNTERS)?;
+            (values, counts, counters) = (rest_values, rest_counts, rest_counters);
+            Some(Block {
+                values: block_values,
+                counts: block_counts,
+                counters: block_counters,
                 hardware_gather: false,
             })
+        })
     }
 
     /// The value in `row` of `channel`'s lane (0 when out of range).
