@@ -1,8 +1,8 @@
 //! The core's compensators on a microcontroller: `examples/thumbv7em`, a `no_std`, `no_main`
-//! program that builds IHC, WIHC and DIHC in `f32` with fixed arrays and no allocator, a
-//! six-axis IHC, WIHC and DIHC banks with their storage fixed at compile time (issue 16) and the full pipeline's
-//! chain (vibration and creep inverses before the IHC, issue 11), is built for a Cortex-M4F
-//! (`thumbv7em-none-eabihf`) and its image inspected: no allocator linked, the step functions
+//! program that builds IHC, WIHC and DIHC in `f32` with fixed arrays and no allocator,
+//! six-axis IHC, WIHC and DIHC banks with their storage fixed at compile time (issue 16) and
+//! the full pipeline's chain (vibration and creep inverses before the IHC, issue 11), is built
+//! for a Cortex-M4F (`thumbv7em-none-eabihf`) and its image inspected: no allocator linked, the step functions
 //! (the banks' and the chain's too) present and unable to reach a panic, the code small, and
 //! the RAM per compensator and per bank equal to the tables in `docs/microcontroller.md` (on
 //! the target and on this host).
@@ -253,8 +253,8 @@ fn compensators_build_for_a_cortex_m4f_without_an_allocator() {
     // loops' reachability walk (2649e29), brings the image to about 52 KiB (53 556 B measured);
     // the chain to 79 200 B: its step is 740 B, the rest the vibration inverse's construction
     // (the numerator's roots, the anti-causal series), run once at start-up; the WIHC and DIHC
-    // banks to 111 980 B (25 500 B and 4 780 B of step). A Cortex-M4F part has 256 KiB to 2 MiB
-    // of flash.
+    // banks to 111 980 B (the WIHC bank's loop over its blocks 25 500 B, the DIHC bank's step
+    // 4 780 B). A Cortex-M4F part has 256 KiB to 2 MiB of flash.
     assert!(
         text < 128 * 1024,
         "the compensators, the banks and the chain take {text} bytes of code; keep them under \

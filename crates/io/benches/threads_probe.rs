@@ -28,12 +28,15 @@ use hystcomp_core::{
 };
 use hystcomp_io::threads::ThreadedBank;
 
-/// ns per channel-step of one run, and the controls' bits.
+/// ns per channel-step of one run, and the controls' bits. The controls are set to NaN first
+/// (outside the timing), so that a run that leaves one unwritten cannot pass the comparison
+/// with what the run before it wrote.
 fn time_run<T: Real>(
     run: &mut dyn FnMut(&[T], &mut [T]),
     desired: &[T],
     control: &mut [T],
 ) -> (f64, Vec<u64>) {
+    control.fill(T::nan());
     let t0 = Instant::now();
     run(black_box(desired), control);
     let ns = t0.elapsed().as_nanos() as f64 / desired.len() as f64;
@@ -186,7 +189,7 @@ fn main() -> Result<(), String> {
     // Bounded before allocating: at most 65 536 channels, 10^6 ticks, 10^7 channel-steps.
     let channels = number(3, "4096", "channels")?.clamp(1, 65_536);
     let ticks = number(4, "200", "ticks")?.clamp(1, 1_000_000);
-    if channels * ticks > 10_000_000 {
+    if channels.saturating_mul(ticks) > 10_000_000 {
         return Err(format!("{channels} x {ticks} channel-steps: at most 10^7"));
     }
     let repeats = number(5, "9", "repeats")?.clamp(1, 1000);

@@ -138,7 +138,7 @@ pub fn six_axes_dihc() -> Result<SixAxesDihc, BankError> {
     SixAxesDihc::new(&inverses, &[(0.0, 1.0)], &[OutputLimits::new(0.0, 1.0)?])
 }
 
-/// One tick of the six-axis bank: `out[c]` for `desired[c]`.
+/// One tick of the six-axis IHC bank: `out[c]` for `desired[c]`.
 #[inline(never)]
 #[unsafe(no_mangle)]
 pub fn hystcomp_ihc_bank_step(
