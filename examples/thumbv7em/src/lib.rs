@@ -91,24 +91,16 @@ pub const BANK_RAM_BYTES: [usize; 3] = [
     size_of::<SixAxesDihc>(),
 ];
 
-/// Table 1 for each of the six axes (each its own copy).
-fn six_plants() -> Result<[Mpim<f32, [f32; N]>; AXES], CoreError> {
-    let plant: Mpim<f32, [f32; N]> = paper::TABLE1.model()?;
-    Ok([
-        plant.clone(),
-        plant.clone(),
-        plant.clone(),
-        plant.clone(),
-        plant.clone(),
-        plant,
-    ])
+/// `model` for each of the six axes (each its own copy).
+fn six_copies(model: &Mpim<f32, [f32; N]>) -> [Mpim<f32, [f32; N]>; AXES] {
+    core::array::from_fn(|_| model.clone())
 }
 
 /// The six-axis IHC bank from Table 1 (each axis its own copy of the model), outputs in
 /// `[0, 1]`.
 pub fn six_axes() -> Result<SixAxes, BankError> {
     SixAxes::new(
-        &six_plants()?,
+        &six_copies(&paper::TABLE1.model()?),
         &[OutputLimits::new(0.0, 1.0)?],
         SolveMode::Exact,
     )
@@ -117,7 +109,7 @@ pub fn six_axes() -> Result<SixAxes, BankError> {
 /// The six-axis WIHC bank from Table 1, outputs in `[0, 1]`.
 pub fn six_axes_wihc() -> Result<SixAxesWihc, BankError> {
     SixAxesWihc::new(
-        &six_plants()?,
+        &six_copies(&paper::TABLE1.model()?),
         &[OutputLimits::new(0.0, 1.0)?],
         SolveMode::Exact,
     )
@@ -126,15 +118,7 @@ pub fn six_axes_wihc() -> Result<SixAxesWihc, BankError> {
 /// The six-axis DIHC bank from Table 2 (the inverse model on inputs `[0, 1]`), outputs in
 /// `[0, 1]`.
 pub fn six_axes_dihc() -> Result<SixAxesDihc, BankError> {
-    let inverse: Mpim<f32, [f32; N]> = paper::TABLE2.model()?;
-    let inverses = [
-        inverse.clone(),
-        inverse.clone(),
-        inverse.clone(),
-        inverse.clone(),
-        inverse.clone(),
-        inverse,
-    ];
+    let inverses = six_copies(&paper::TABLE2.model()?);
     SixAxesDihc::new(&inverses, &[(0.0, 1.0)], &[OutputLimits::new(0.0, 1.0)?])
 }
 
