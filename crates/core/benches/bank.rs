@@ -12,14 +12,14 @@
 
 use criterion::{BenchmarkId, Criterion, Throughput, criterion_group, criterion_main};
 use hystcomp_core::{
-    CompensatorBank, DihcBank, Heap, IhcBank, Mpim, OutputLimits, Real, SolveMode, VectorPath,
-    WihcBank, paper, with_vector_path,
+    CompensatorBank, DihcBank, Heap, IhcBank, OutputLimits, Real, SolveMode, VectorPath, WihcBank,
+    with_vector_path,
 };
 use std::hint::black_box;
 
 #[path = "common/bank_workload.rs"]
 mod bank_workload;
-use bank_workload::{channel_model, signal};
+use bank_workload::{channel_models, signal};
 
 /// Ticks per measured iteration.
 const TICKS: usize = 200;
@@ -45,12 +45,7 @@ fn bench_type<T: Real>(c: &mut Criterion, type_name: &str) {
         group.throughput(Throughput::Elements((TICKS * channels) as u64));
         // Few samples for the large banks: each iteration is already 800 000 channel-steps.
         group.sample_size(if channels >= 1_024 { 20 } else { 50 });
-        let plants: Vec<Mpim<T, Vec<T>>> = (0..channels)
-            .map(|k| channel_model(&paper::TABLE1, k))
-            .collect();
-        let inverses: Vec<Mpim<T, Vec<T>>> = (0..channels)
-            .map(|k| channel_model(&paper::TABLE2, k))
-            .collect();
+        let (plants, inverses) = channel_models::<T>(channels);
         let desired = signal(&plants, TICKS);
         let mut control = vec![T::zero(); desired.len()];
         let mut banks: Vec<(&str, Box<dyn CompensatorBank<T>>)> = vec![

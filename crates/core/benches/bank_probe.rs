@@ -22,11 +22,11 @@ use std::hint::black_box;
 
 #[path = "common/bank_workload.rs"]
 mod bank_workload;
-use bank_workload::{channel_model, signal};
+use bank_workload::{channel_models, signal};
 
 use hystcomp_core::{
     CompensatorBank, DihcBank, Heap, IhcBank, OutputLimits, Real, SolveMode, VectorPath, WihcBank,
-    paper, with_vector_path,
+    with_vector_path,
 };
 
 /// `struct timespec` of 64-bit Linux.
@@ -60,12 +60,7 @@ fn now_ns(start: std::time::Instant) -> f64 {
 }
 
 fn probe<T: Real>(kind: &str, path: VectorPath, channels: usize, ticks: usize, repeats: usize) {
-    let plants: Vec<_> = (0..channels)
-        .map(|c| channel_model::<T>(&paper::TABLE1, c))
-        .collect();
-    let inverses: Vec<_> = (0..channels)
-        .map(|c| channel_model::<T>(&paper::TABLE2, c))
-        .collect();
+    let (plants, inverses) = channel_models::<T>(channels);
     let desired = signal(&plants, ticks);
     let mut control = vec![T::zero(); desired.len()];
     let limits = [OutputLimits::new(T::zero(), T::one()).expect("0 < 1")];

@@ -21,11 +21,9 @@ use std::time::Instant;
 
 #[path = "../../core/benches/common/bank_workload.rs"]
 mod bank_workload;
-use bank_workload::{channel_model, signal};
+use bank_workload::{channel_models, signal};
 
-use hystcomp_core::{
-    CompensatorBank, DihcBank, Heap, IhcBank, OutputLimits, Real, SolveMode, paper,
-};
+use hystcomp_core::{CompensatorBank, DihcBank, Heap, IhcBank, OutputLimits, Real, SolveMode};
 use hystcomp_io::threads::ThreadedBank;
 
 /// ns per channel-step of one run, and the controls' bits. The controls are set to NaN first
@@ -128,12 +126,7 @@ fn probe<T: Real>(
     repeats: usize,
     parts: usize,
 ) -> Result<(), String> {
-    let plants: Vec<_> = (0..channels)
-        .map(|c| channel_model::<T>(&paper::TABLE1, c))
-        .collect();
-    let inverses: Vec<_> = (0..channels)
-        .map(|c| channel_model::<T>(&paper::TABLE2, c))
-        .collect();
+    let (plants, inverses) = channel_models::<T>(channels);
     let desired = signal(&plants, ticks);
     let limits = [OutputLimits::new(T::zero(), T::one()).expect("0 < 1")];
     let label = format!(

@@ -2,7 +2,7 @@
 //! criterion bench, and `benches/bank_probe.rs`); `hystcomp bench --channels`
 //! (`crates/cli/src/commands/bench_bank.rs`) times the same.
 
-use hystcomp_core::{Mpim, Real, paper::PublishedMpim};
+use hystcomp_core::{Mpim, Real, paper, paper::PublishedMpim};
 
 /// Operators per channel.
 pub const OPERATORS: usize = 10;
@@ -15,6 +15,16 @@ pub fn channel_model<T: Real>(table: &PublishedMpim, channel: usize) -> Mpim<T, 
     let scale = T::from_f64(1.0 + 0.1 * s);
     let weights: Vec<T> = base.weights().iter().map(|&b| b * scale).collect();
     Mpim::new(base.thresholds(), &weights, base.a1(), base.a2()).expect("scaled weights")
+}
+
+/// One model per channel.
+pub type Models<T> = Vec<Mpim<T, Vec<T>>>;
+
+/// The plants (Table 1) and the inverse models (Table 2, for DIHC) of `channels` channels, each
+/// channel's [`channel_model`].
+pub fn channel_models<T: Real>(channels: usize) -> (Models<T>, Models<T>) {
+    let models = |table: &PublishedMpim| (0..channels).map(|c| channel_model(table, c)).collect();
+    (models(&paper::TABLE1), models(&paper::TABLE2))
 }
 
 /// `ticks x channels` desired positions (row-major): each channel the three-tone voltage of
