@@ -23,6 +23,15 @@ fn stage_file(dir: &Path) -> (PathBuf, StageConfig) {
     (path.clone(), StageConfig::from_toml_file(&path).unwrap())
 }
 
+/// Writes `desired` (um) sampled at `rate_hz` as a `time_s,desired_um` trajectory file.
+fn write_desired(path: &Path, desired: &[f64], rate_hz: f64) {
+    let mut text = String::from("time_s,desired_um\n");
+    for (k, y) in desired.iter().enumerate() {
+        text.push_str(&format!("{},{y}\n", k as f64 / rate_hz));
+    }
+    std::fs::write(path, text).unwrap();
+}
+
 fn write_record(path: &Path, command: &[f64], measured: &[f64]) {
     let mut text = String::from("time_s,command_v,measured_um\n");
     for (k, (v, y)) in command.iter().zip(measured).enumerate() {
@@ -211,11 +220,7 @@ fn identify_compensate_and_crossval_take_the_full_model() {
     // compensate: the paper's trajectory at the model's rate, checked against the amplifier.
     let desired = dir.path().join("desired.csv");
     let trajectory = Signal::paper(1.0, 20.0, RATE).sample().unwrap();
-    let mut text = String::from("time_s,desired_um\n");
-    for (k, y) in trajectory.iter().enumerate() {
-        text.push_str(&format!("{},{y}\n", k as f64 / RATE));
-    }
-    std::fs::write(&desired, text).unwrap();
+    write_desired(&desired, &trajectory, RATE);
     // The drive (IHC, limits 0-10 V, `extra` options), its report, and its e_rms on the stage
     // over the second half of the trajectory.
     let compensate = |name: &str, extra: &[&str]| {
@@ -266,11 +271,7 @@ fn identify_compensate_and_crossval_take_the_full_model() {
     assert!(short_e_rms < 1.0, "{short_e_rms}");
     // A trajectory at another rate is refused: the vibration link is discrete.
     let wrong = dir.path().join("wrong.csv");
-    let mut text = String::from("time_s,desired_um\n");
-    for (k, y) in trajectory.iter().enumerate().take(1000) {
-        text.push_str(&format!("{},{y}\n", k as f64 / 1000.0));
-    }
-    std::fs::write(&wrong, text).unwrap();
+    write_desired(&wrong, &trajectory[..1000], 1000.0);
     assert_fails(
         &[
             "compensate",
@@ -288,11 +289,7 @@ fn identify_compensate_and_crossval_take_the_full_model() {
     // A fast trajectory: the amplifier cannot slew it, and compensate says so before driving.
     let fast = dir.path().join("fast.csv");
     let trajectory = Signal::paper(100.0, 0.2, RATE).sample().unwrap();
-    let mut text = String::from("time_s,desired_um\n");
-    for (k, y) in trajectory.iter().enumerate() {
-        text.push_str(&format!("{},{y}\n", k as f64 / RATE));
-    }
-    std::fs::write(&fast, text).unwrap();
+    write_desired(&fast, &trajectory, RATE);
     let out = hystcomp(&[
         "compensate",
         "--model",
