@@ -69,7 +69,7 @@ fn bench(c: &mut Criterion) {
             b.iter(|| identify(black_box(&voltage), black_box(&displacement), &options))
         });
     }
-    group.bench_function("pso 40x200 n=10", |b| {
+    group.bench_function("pso defaults n=10", |b| {
         b.iter(|| identify(black_box(&voltage), black_box(&displacement), &pso))
     });
     group.finish();
