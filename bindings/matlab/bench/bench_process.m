@@ -17,16 +17,21 @@ inverse = hystcomp.load_model(fullfile(root, 'models', 'table2-inverse.json'));
 % One period of a 1 Hz cosine from rest, within 10 .. 65 um (reachable: nothing saturates).
 t = (0:samples - 1)' / samples;
 yd = 10 + 27.5 * (1 - cos(2 * pi * t));
-methods = {'ihc', plant; 'ihc-delayed', plant; 'wihc', plant; 'wihc-delayed', plant; ...
-           'dihc', inverse};
+% The third column allows the plain one-sample-delayed loop where the model's loop gain can
+% reach 1 (Table 1's WIHC: 1.66), as the Rust benches time it; the guarded loops are the safe
+% form of the delayed ones.
+methods = {'ihc', plant, false; 'ihc-delayed', plant, false; 'ihc-guarded', plant, false; ...
+           'wihc', plant, false; 'wihc-delayed', plant, true; 'wihc-guarded', plant, false; ...
+           'dihc', inverse, false};
 steps = min(samples, 10000);
 results = struct('method', {}, 'process_ns', {}, 'gateway_ns', {}, 'step_ns', {}, ...
                  'gateway_step_ns', {});
 fprintf('%-13s %12s %12s %12s %12s   (ns per sample, median of %d runs of %d samples)\n', ...
         'method', 'c.process', 'mex process', 'c.step', 'mex step', repeats, samples);
 for k = 1:size(methods, 1)
-    c = hystcomp.Compensator(methods{k, 2}, methods{k, 1});
-    id = hystcomp_mex('compensator_new', methods{k, 2}, methods{k, 1});
+    c = hystcomp.Compensator(methods{k, 2}, methods{k, 1}, [], ...
+                             'AllowUnstableDelay', methods{k, 3});
+    id = hystcomp_mex('compensator_new', methods{k, 2}, methods{k, 1}, [], methods{k, 3});
     process = zeros(repeats, 1);
     gateway = zeros(repeats, 1);
     step = zeros(repeats, 1);
