@@ -113,6 +113,16 @@ impl<'a> Files<'a> {
                             in_path.display()
                         )));
                     }
+                    _ if resolved_input.directory && out.path.starts_with(&resolved_input.path) => {
+                        return Err(CliError::input(format!(
+                            "{output} {} lies inside {input} {}, a directory the command reads \
+                             (a model set's directory reads every file in it as a channel): \
+                             writing there could replace or add to its files; give a path \
+                             outside it",
+                            out_path.display(),
+                            in_path.display()
+                        )));
+                    }
                     Kind::Directory if resolved_input.path.starts_with(&out.path) => {
                         return Err(CliError::input(format!(
                             "{output} {} holds the input {input} {}: the command writes its \
@@ -157,6 +167,8 @@ struct Resolved {
     path: PathBuf,
     /// Device and inode of an existing file (Unix), which also identify hard links.
     id: Option<(u64, u64)>,
+    /// Whether the path is an existing directory (an input directory may hold no output).
+    directory: bool,
 }
 
 impl Resolved {
@@ -164,6 +176,7 @@ impl Resolved {
         Resolved {
             path: resolve(path),
             id: file_id(path),
+            directory: path.is_dir(),
         }
     }
 
@@ -289,7 +302,7 @@ mod tests {
     }
 
     #[test]
-    fn directories_may_not_hold_inputs_and_outputs_may_not_clash() {
+    fn directories_may_not_hold_inputs_nor_input_directories_outputs_and_outputs_may_not_clash() {
         let dir = tempfile::tempdir().unwrap();
         let input = dir.path().join("report/stage.toml");
         std::fs::create_dir(dir.path().join("report")).unwrap();
@@ -303,6 +316,34 @@ mod tests {
         Files::new()
             .input("--stage", &input)
             .output_directory("--out", &dir.path().join("report2"))
+            .check()
+            .unwrap();
+        // An input directory (a model set's) holds no output, new file or not, by any spelling.
+        let set = dir.path().join("set");
+        std::fs::create_dir(&set).unwrap();
+        touch(&set.join("x.json"));
+        for out in [
+            set.join("x.json"),
+            set.join("new.json"),
+            set.join("sub/drive.csv"),
+            dir.path().join("report/../set/y.csv"),
+        ] {
+            let err = Files::new()
+                .input("--model", &set)
+                .output("--output", &out)
+                .check()
+                .expect_err("refused");
+            assert!(err.to_string().contains("lies inside --model"), "{err}");
+            let err = Files::new()
+                .input("--model", &set)
+                .output_directory("--out", &out)
+                .check()
+                .expect_err("refused");
+            assert!(err.to_string().contains("lies inside --model"), "{err}");
+        }
+        Files::new()
+            .input("--model", &set)
+            .output("--output", &dir.path().join("set.csv"))
             .check()
             .unwrap();
         let a = dir.path().join("a.json");

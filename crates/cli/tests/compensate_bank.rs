@@ -145,6 +145,66 @@ fn each_channel_is_its_own_model_compensated_alone() {
 }
 
 #[test]
+fn a_model_set_directory_holds_no_output() {
+    let dir = tempfile::tempdir().unwrap();
+    let desired = trajectory(dir.path(), ["x", "y", "z"]);
+    let set_dir = dir.path().join("set");
+    std::fs::create_dir(&set_dir).unwrap();
+    let set = ModelSet::load(&models().join("table1-xyz-set.json")).unwrap();
+    for channel in &set.channels {
+        channel
+            .model
+            .save(&set_dir.join(format!("{}.json", channel.name)))
+            .unwrap();
+    }
+    let before: Vec<Vec<u8>> = ["x", "y", "z"]
+        .iter()
+        .map(|n| std::fs::read(set_dir.join(format!("{n}.json"))).unwrap())
+        .collect();
+    // Over one of its model files, or a new file beside them (the next run would read it as
+    // a channel): refused, nothing written.
+    for out in [set_dir.join("x.json"), set_dir.join("drive.csv")] {
+        assert_fails(
+            &[
+                "compensate",
+                "--model",
+                s(&set_dir),
+                "--method",
+                "ihc",
+                "--desired",
+                s(&desired),
+                "-o",
+                s(&out),
+            ],
+            &["lies inside --model"],
+        );
+    }
+    assert!(!set_dir.join("drive.csv").exists());
+    for (n, bytes) in ["x", "y", "z"].iter().zip(&before) {
+        assert_eq!(
+            &std::fs::read(set_dir.join(format!("{n}.json"))).unwrap(),
+            bytes,
+            "{n}"
+        );
+    }
+    // Beside the directory: written.
+    let out = dir.path().join("drive.csv");
+    let output = hystcomp(&[
+        "compensate",
+        "--model",
+        s(&set_dir),
+        "--method",
+        "ihc",
+        "--desired",
+        s(&desired),
+        "-o",
+        s(&out),
+    ]);
+    assert!(output.status.success(), "{}", stderr(&output));
+    assert_eq!(columns(&out, 7).len(), 7);
+}
+
+#[test]
 fn bad_input_names_the_channel() {
     let dir = tempfile::tempdir().unwrap();
     let desired = trajectory(dir.path(), ["x", "y", "z"]);
