@@ -34,7 +34,8 @@
 use std::ops::Range;
 
 use hystcomp_core::{
-    CompensatorBank, CoreError, Diagnostics, LANES, OutputLimits, Real, check_signal, check_tick,
+    BankError, CompensatorBank, CoreError, Diagnostics, LANES, OutputLimits, Real, check_signal,
+    check_tick,
 };
 use rayon::prelude::*;
 
@@ -52,12 +53,13 @@ pub struct ThreadedBank<B> {
 impl<B> ThreadedBank<B> {
     /// `channels` channels in `parts` parts (at least one, at most one per block of
     /// [`LANES`] channels): `build(range)` makes the bank of the channels in `range` (e.g. a
-    /// core bank of `models[range]`). Its first error is returned.
-    pub fn new<E>(
+    /// core bank of `models[range]`). Its first error is returned, a refused channel named by
+    /// its index in the whole bank (`build` names it within its part).
+    pub fn new(
         channels: usize,
         parts: usize,
-        mut build: impl FnMut(Range<usize>) -> Result<B, E>,
-    ) -> Result<Self, E> {
+        mut build: impl FnMut(Range<usize>) -> Result<B, BankError>,
+    ) -> Result<Self, BankError> {
         let blocks = channels.div_ceil(LANES).max(1);
         let parts = parts.clamp(1, blocks);
         let part_channels = blocks.div_ceil(parts) * LANES;
@@ -65,7 +67,14 @@ impl<B> ThreadedBank<B> {
         let mut start = 0;
         while start < channels {
             let end = (start + part_channels).min(channels);
-            built.push(build(start..end)?);
+            let part = build(start..end).map_err(|error| match error {
+                BankError::Channel { channel, error } => BankError::Channel {
+                    channel: channel + start,
+                    error,
+                },
+                other => other,
+            })?;
+            built.push(part);
             start = end;
         }
         Ok(ThreadedBank {
@@ -171,6 +180,32 @@ mod tests {
                 if (k * 7 + c) % 211 == 0 { f64::NAN } else { y }
             })
             .collect()
+    }
+
+    /// A channel refused in any part is named by its index in the whole bank, as the unsplit
+    /// bank names it.
+    #[test]
+    fn a_refused_channel_is_named_by_its_index_in_the_whole_bank() {
+        let limits = [OutputLimits::new(0.0, 1.0).unwrap()];
+        let channels = 40;
+        // A hysteresis model whose eq. (7) is not invertible on [0, 1] (a1 too negative).
+        let base = model(&paper::TABLE1, 0);
+        let refused = Mpim::new(base.thresholds(), base.weights(), -2.0, base.a2()).unwrap();
+        for bad in [0, 7, 8, 23, 39] {
+            let mut plants: Vec<_> = (0..channels).map(|c| model(&paper::TABLE1, c)).collect();
+            plants[bad] = refused.clone();
+            let whole =
+                IhcBank::<f64, Heap>::new(&plants, &limits, SolveMode::Exact).expect_err("refused");
+            assert_eq!(whole.channel(), Some(bad));
+            for parts in 1..=5 {
+                let split = ThreadedBank::new(channels, parts, |r: Range<usize>| {
+                    IhcBank::<f64, Heap>::new(&plants[r], &limits, SolveMode::Exact)
+                })
+                .expect_err("refused");
+                assert_eq!(split.channel(), Some(bad), "channel {bad} in {parts} parts");
+                assert_eq!(split.error(), whole.error());
+            }
+        }
     }
 
     /// Split into 1 to 5 parts, step by step and whole, every channel gives the unsplit
