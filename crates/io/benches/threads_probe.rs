@@ -57,7 +57,7 @@ fn compare<T: Real, B: CompensatorBank<T> + Send>(
     let mut control = vec![T::zero(); desired.len()];
     let mut plain = build(0..channels);
     let mut threaded =
-        ThreadedBank::new(channels, parts, |r| Ok(build(r))).map_err(|()| "a part".to_string())?;
+        ThreadedBank::new(channels, parts, |r| Ok(build(r))).map_err(|e| e.to_string())?;
     fn by_tick<T: Real>(b: &mut impl CompensatorBank<T>, d: &[T], c: &mut [T], channels: usize) {
         b.reset();
         for (d, c) in d.chunks_exact(channels).zip(c.chunks_exact_mut(channels)) {
