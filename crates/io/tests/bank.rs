@@ -201,6 +201,39 @@ fn bad_sets_are_refused_naming_the_channel() {
     assert!(message.contains("missing.json"), "{message}");
 }
 
+/// One model of many operators pads every channel of its bank to its rows: a bank whose
+/// storage would pass `MAX_BANK_VALUES` is refused before anything is allocated (4 096
+/// channels, one of 10 000 operators: 512 blocks x 50 011 rows x 8 lanes, 205 million values),
+/// and the same channels without it are built.
+#[test]
+fn a_bank_too_large_for_its_storage_bound_is_refused_before_allocating() {
+    let base = example("table1-plant.json");
+    let mut big = base.clone();
+    let n = 10_000;
+    big.thresholds = (0..n).map(|i| i as f64 / n as f64).collect();
+    big.weights = vec![base.weights.iter().sum::<f64>() / n as f64; n];
+    big.validate().unwrap();
+    let mut files = vec![base.clone(); 4096];
+    files[17] = big;
+    let err = ScaledBank::new(&set_of(files), Method::Ihc, None, UnstableDelay::Refuse)
+        .expect_err("refused");
+    let message = err.to_string();
+    assert!(message.contains("values of bank storage"), "{message}");
+    assert!(
+        message.contains(&hystcomp_core::MAX_BANK_VALUES.to_string()),
+        "{message}"
+    );
+    assert!(
+        ScaledBank::new(
+            &set_of(vec![base; 4096]),
+            Method::Ihc,
+            None,
+            UnstableDelay::Refuse
+        )
+        .is_ok()
+    );
+}
+
 #[test]
 fn a_refused_channel_is_named_when_the_bank_is_built() {
     let set = ModelSet::load(&models_dir().join("table1-xyz-set.json")).unwrap();

@@ -66,6 +66,15 @@ pub const LANES: usize = 8;
 /// actuators), so that every size stays far from overflow.
 pub const MAX_CHANNELS: usize = 1 << 20;
 
+/// The most values a bank's storage holds: 2^27 (1 GiB in `f64`), checked before anything is
+/// allocated. Every channel takes the rows of the bank's largest model (a block of [`LANES`]
+/// channels is one run of rows, so one model of many operators pads every other channel to
+/// its size): channels rounded up to whole blocks, times the rows per channel
+/// ([`plant_bank_rows`], [`dihc_bank_rows`]: five per operator plus the scalars and input
+/// coefficients for IHC and WIHC). 4 096 channels of 10 operators take 250 000 values; a bank
+/// of channels whose operator counts differ widely is better split into banks by size.
+pub const MAX_BANK_VALUES: usize = 1 << 27;
+
 /// Many compensators of one kind stepped together, one channel each (see the
 /// [module documentation](self)).
 ///

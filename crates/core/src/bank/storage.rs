@@ -254,8 +254,22 @@ pub(crate) struct Blocks<T: Real, S: BankStorage<T, W>, const W: usize> {
 }
 
 impl<T: Real, S: BankStorage<T, W>, const W: usize> Blocks<T, S, W> {
-    /// Zeroed storage for `blocks` blocks.
+    /// Zeroed storage for `blocks` blocks, at most [`super::MAX_BANK_VALUES`] values (checked
+    /// before allocating).
     pub fn new(blocks: usize, value_rows: usize, count_rows: usize) -> Result<Self, CoreError> {
+        let values = blocks
+            .checked_mul(value_rows)
+            .and_then(|rows| rows.checked_mul(W))
+            .unwrap_or(usize::MAX);
+        if values > super::MAX_BANK_VALUES {
+            return Err(CoreError::TooLarge {
+                what: "values of bank storage (every channel, padded to a whole block of lanes, \
+                       takes the rows of the bank's largest model; split channels of very \
+                       different operator counts into banks by size)",
+                found: values,
+                max: super::MAX_BANK_VALUES,
+            });
+        }
         Ok(Blocks {
             values: filled([T::zero(); W], blocks * value_rows)?,
             counts: filled([0; W], blocks * count_rows)?,
