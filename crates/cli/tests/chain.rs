@@ -205,17 +205,29 @@ fn identify_compensate_and_crossval_take_the_full_model() {
     // For people: the links and their contributions.
     let text = hystcomp(&identify_args(&data, &plant, &from, &to)[1..]);
     assert!(stdout(&text).contains("+ vibration"), "{}", stdout(&text));
-    // --dynamics adds the vibration link with the creep link: the same model as
-    // --model-structure full.
+    // --creep --dynamics add both links: the same model as --model-structure full.
     let flagged = dir.path().join("flagged.json");
     let mut args = identify_args(&data, &flagged, &from, &to);
     let at = args.iter().position(|a| *a == "--model-structure").unwrap();
-    args.splice(at..at + 2, ["--dynamics"]);
+    args.splice(at..at + 2, ["--creep", "--dynamics"]);
     let out = hystcomp(&args);
     assert!(out.status.success(), "{}", stderr(&out));
     let flagged = ModelFile::load(&flagged).unwrap();
     assert_eq!(flagged.creep, model.creep);
     assert_eq!(flagged.vibration, model.vibration);
+    // --dynamics alone (as --model-structure vibration): the vibration link, no creep link.
+    for structure in [&["--dynamics"][..], &["--model-structure", "vibration"][..]] {
+        let alone = dir.path().join("vibration-only.json");
+        let mut args = identify_args(&data, &alone, &from, &to);
+        let at = args.iter().position(|a| *a == "--model-structure").unwrap();
+        args.splice(at..at + 2, structure.iter().copied());
+        let out = hystcomp(&args);
+        assert!(out.status.success(), "{}", stderr(&out));
+        let alone = ModelFile::load(&alone).unwrap();
+        assert!(alone.creep.is_none(), "{structure:?}");
+        assert!(alone.vibration.is_some(), "{structure:?}");
+        assert_eq!(alone.sample_rate_hz, Some(RATE));
+    }
 
     // compensate: the paper's trajectory at the model's rate, checked against the amplifier.
     let desired = dir.path().join("desired.csv");
@@ -400,6 +412,33 @@ fn identify_compensate_and_crossval_take_the_full_model() {
             .collect::<Vec<_>>(),
         &["sampled at 1000 Hz, the training record at 2000 Hz; creep and vibration"],
     );
+    // predict: a model with creep and vibration links runs only at its own rate.
+    let predict = |record: &Path, out: &str| {
+        vec![
+            "predict".to_owned(),
+            "--model".to_owned(),
+            s(&plant).to_owned(),
+            "--data".to_owned(),
+            s(record).to_owned(),
+            "--voltage-column".to_owned(),
+            "command_v".to_owned(),
+            "--displacement-column".to_owned(),
+            "measured_um".to_owned(),
+            "--time-column".to_owned(),
+            "time_s".to_owned(),
+            "-o".to_owned(),
+            s(&dir.path().join(out)).to_owned(),
+        ]
+    };
+    let args = predict(&slow, "slow-prediction.csv");
+    assert_fails(
+        &args.iter().map(String::as_str).collect::<Vec<_>>(),
+        &["the record is sampled at 1000 Hz", "identified at 2000 Hz"],
+    );
+    assert!(!dir.path().join("slow-prediction.csv").exists());
+    let args = predict(&data, "prediction.csv");
+    let out = hystcomp(&args.iter().map(String::as_str).collect::<Vec<_>>());
+    assert!(out.status.success(), "{}", stderr(&out));
     // Creep and vibration need the sample rate.
     assert_fails(
         &[

@@ -2,6 +2,7 @@
 //! chain hysteresis -> creep -> vibration, `hystcomp_identify::chain`).
 
 use hystcomp_identify::{ChainOptions, ChainReport, CreepOptions, DynamicsOptions};
+use hystcomp_io::model_file::ModelFile;
 
 use super::identify::{ColumnArgs, Loaded};
 use crate::{CliError, bounds};
@@ -13,6 +14,8 @@ pub enum Structure {
     Hysteresis,
     /// The MPIM and a creep link.
     Creep,
+    /// The MPIM and a vibration link (no creep link).
+    Vibration,
     /// The MPIM, a creep link and a vibration link.
     Full,
 }
@@ -32,10 +35,10 @@ pub enum CreepFit {
 #[derive(Debug, Clone, clap::Args)]
 pub struct ChainArgs {
     /// Links of the model: hysteresis (the MPIM alone), creep (with a creep link: first-order
-    /// elements at log-spaced time constants, fitted jointly with the hysteresis) or full
-    /// (also a vibration link: a unit-gain discrete model with a delay, order chosen from the
-    /// data). --creep and --dynamics add one link each. Creep and vibration need the sample
-    /// rate: a time column or --sample-rate.
+    /// elements at log-spaced time constants, fitted jointly with the hysteresis), vibration
+    /// (with a vibration link: a unit-gain discrete model with a delay, order chosen from the
+    /// data) or full (both links). --creep and --dynamics add one link each. Creep and
+    /// vibration need the sample rate: a time column or --sample-rate.
     #[arg(
         long,
         value_enum,
@@ -46,7 +49,7 @@ pub struct ChainArgs {
     /// Add the creep link (as --model-structure creep).
     #[arg(long)]
     pub creep: bool,
-    /// Add the vibration link (with the creep link: as --model-structure full).
+    /// Add the vibration link (as --model-structure vibration; with --creep, as full).
     #[arg(long)]
     pub dynamics: bool,
     /// The creep link's time constants, s, comma-separated and increasing (default: two per
@@ -75,12 +78,12 @@ pub struct ChainArgs {
 impl ChainArgs {
     /// Whether the model has a creep link.
     pub fn has_creep(&self) -> bool {
-        self.creep || self.dynamics || self.model_structure != Structure::Hysteresis
+        self.creep || matches!(self.model_structure, Structure::Creep | Structure::Full)
     }
 
     /// Whether the model has a vibration link.
     pub fn has_dynamics(&self) -> bool {
-        self.dynamics || self.model_structure == Structure::Full
+        self.dynamics || matches!(self.model_structure, Structure::Vibration | Structure::Full)
     }
 
     /// The chain's options for a record, `None` for the MPIM alone.
@@ -182,6 +185,47 @@ fn sample_rate(columns: &ColumnArgs, loaded: &Loaded) -> Result<f64, CliError> {
              --sample-rate",
         )),
     }
+}
+
+/// With creep or vibration links, a signal must be sampled at the model's rate (the vibration
+/// link is a discrete model at it, the creep link discretised for it): `rate_hz` is the
+/// signal's (`what`, e.g. "the trajectory"), checked to 0.1 %.
+pub fn check_model_rate(model: &ModelFile, rate_hz: f64, what: &str) -> Result<(), CliError> {
+    let Some(rate) = model.sample_rate_hz.filter(|_| model.has_links()) else {
+        return Ok(());
+    };
+    if (rate_hz / rate - 1.0).abs() > 1e-3 || !rate_hz.is_finite() {
+        return Err(CliError::input(format!(
+            "{what} is sampled at {} Hz but the model's creep and vibration links were \
+             identified at {} Hz; resample {what} at the model's rate",
+            crate::number(rate_hz),
+            crate::number(rate)
+        )));
+    }
+    Ok(())
+}
+
+/// [`check_model_rate`] for a record read with `columns`: its rate from its time column or
+/// `--sample-rate`; with neither, the model's rate is taken and a warning says so.
+pub fn check_record_rate(
+    model: &ModelFile,
+    columns: &ColumnArgs,
+    loaded: &Loaded,
+) -> Result<(), CliError> {
+    let Some(rate) = model.sample_rate_hz.filter(|_| model.has_links()) else {
+        return Ok(());
+    };
+    let timed = loaded.time.as_ref().is_some_and(|t| t.len() >= 2);
+    if !timed && columns.sample_rate.is_none() {
+        errln!(
+            "hystcomp: warning: the record has no time column and no --sample-rate was given; \
+             taking it as sampled at the model's {} Hz (its creep and vibration links hold at \
+             that rate only)",
+            crate::number(rate)
+        );
+        return Ok(());
+    }
+    check_model_rate(model, sample_rate(columns, loaded)?, "the record")
 }
 
 /// Prints what the chain's links contribute, for people.

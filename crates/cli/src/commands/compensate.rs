@@ -221,7 +221,11 @@ pub fn run(args: &Args, ctx: Context) -> Result<(), CliError> {
     let (time, desired) = (&columns.values[0], &columns.values[1]);
     data::check_time_increasing(time)
         .map_err(|e| CliError::from(e).context(args.trajectory.display()))?;
-    check_rate(&model, time).map_err(|e| e.context(args.trajectory.display()))?;
+    if time.len() >= 2 {
+        let step = (time[time.len() - 1] - time[0]) / (time.len() - 1) as f64;
+        super::chain_args::check_model_rate(&model, 1.0 / step, "the trajectory")
+            .map_err(|e| e.context(args.trajectory.display()))?;
+    }
 
     if args.method.is_plain_delayed()
         && let Some(gain) = compensator.delayed_loop_gain().filter(|g| *g >= 1.0)
@@ -490,27 +494,6 @@ fn drive_period_s(time: &[f64], stage: &hystcomp_stage::StageConfig) -> f64 {
         }
         _ => 1.0 / stage.sample_rate_hz,
     }
-}
-
-/// With creep or vibration links, the trajectory must be sampled at the model's rate (the
-/// vibration link is a discrete model at it, the creep link discretised for it).
-fn check_rate(model: &ModelFile, time: &[f64]) -> Result<(), CliError> {
-    let Some(rate) = model.sample_rate_hz.filter(|_| model.has_links()) else {
-        return Ok(());
-    };
-    if time.len() < 2 {
-        return Ok(());
-    }
-    let step = (time[time.len() - 1] - time[0]) / (time.len() - 1) as f64;
-    if ((1.0 / step) / rate - 1.0).abs() > 1e-3 {
-        return Err(CliError::input(format!(
-            "the trajectory is sampled at {} Hz but the model's creep and vibration links were \
-             identified at {} Hz; resample the trajectory at the model's rate",
-            crate::number(1.0 / step),
-            crate::number(rate)
-        )));
-    }
-    Ok(())
 }
 
 /// The message for desired positions out of the model's reach, per method.

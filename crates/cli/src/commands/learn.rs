@@ -435,6 +435,8 @@ fn trial(
             )
         }
     };
+    super::chain_args::check_model_rate(&model, fs, "the desired trajectory")
+        .map_err(|e| e.context(model_name.as_str()))?;
     let options = options(args, fs)?;
     let mut learner = Learner::resume(&model, &desired, &drive, options).map_err(learn_error)?;
     // The previous trials, when the drive came from `learn`.

@@ -92,6 +92,8 @@ pub fn run(args: &Args, ctx: Context) -> Result<(), CliError> {
             .context(args.model.display()));
         }
     }
+    super::chain_args::check_record_rate(&model, c, &loaded)
+        .map_err(|e| e.context(args.data.display()))?;
     let prediction = hystcomp_identify::predict(
         &model,
         hystcomp_identify::Record {
