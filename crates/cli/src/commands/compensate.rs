@@ -262,7 +262,15 @@ pub fn run(args: &Args, ctx: Context) -> Result<(), CliError> {
         let d = inverted[k.min(n - 1)];
         let drive = compensator.step(d);
         let Some(at) = k.checked_sub(p) else {
-            before = compensator.diagnostics();
+            // The preview filling: a clamp here shapes the first samples' drive.
+            let after = compensator.diagnostics();
+            if after.saturated > before.saturated && first_unreachable.is_none() {
+                first_unreachable = time.first().copied();
+            }
+            if after.loop_saturated > before.loop_saturated && first_loop.is_none() {
+                first_loop = time.first().copied();
+            }
+            before = after;
             continue;
         };
         control[at] = drive;
