@@ -205,6 +205,22 @@ fn identify_compensate_and_crossval_take_the_full_model() {
     // For people: the links and their contributions.
     let text = hystcomp(&identify_args(&data, &plant, &from, &to)[1..]);
     assert!(stdout(&text).contains("+ vibration"), "{}", stdout(&text));
+    // Which samples the hysteresis and creep were fitted on (every second, up to the
+    // vibration segment when it lies in the record's second half).
+    let record_samples = std::fs::read_to_string(&data).unwrap().lines().count() - 1;
+    assert!(
+        stdout(&text).contains(&format!(
+            "chain: the record has {record_samples} samples; the hysteresis and creep fitted \
+             on samples 1 .. "
+        )),
+        "{}",
+        stdout(&text)
+    );
+    assert!(
+        stdout(&text).contains("(every 2 samples;"),
+        "{}",
+        stdout(&text)
+    );
     // --creep --dynamics add both links: the same model as --model-structure full.
     let flagged = dir.path().join("flagged.json");
     let mut args = identify_args(&data, &flagged, &from, &to);

@@ -281,6 +281,33 @@ pub struct ChainReport {
     pub fit: ErrorStats,
     /// Wall-clock time, s.
     pub elapsed_s: f64,
+    /// Which samples of the record each link was fitted on.
+    #[serde(default)]
+    pub span: FittedSpan,
+}
+
+/// Which samples of the record a chain was identified on: the hysteresis (and its report's
+/// sample counts) and the creep on every `decimation`-th of the first `hysteresis_end`, the
+/// vibration link on its segment at the full rate.
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+pub struct FittedSpan {
+    /// The record's samples.
+    pub record: usize,
+    /// The hysteresis and creep fit ends here (at the vibration segment when it lies in the
+    /// record's second half, else at its end).
+    pub hysteresis_end: usize,
+    /// Every this many samples fitted for the hysteresis and creep.
+    pub decimation: usize,
+}
+
+impl FittedSpan {
+    fn of(chain: &ChainOptions, record: usize) -> Self {
+        FittedSpan {
+            record,
+            hysteresis_end: fitted_end(chain, record),
+            decimation: chain.decimation,
+        }
+    }
 }
 
 /// An identified chain: the model file (format version 2 when it has links) and its report.
@@ -332,6 +359,7 @@ pub fn identify_chain(
     };
     let report = ChainReport {
         elapsed_s: started.elapsed().as_secs_f64(),
+        span: FittedSpan::of(chain, voltage.len()),
         ..report
     };
     let mut model = model;
@@ -397,6 +425,7 @@ pub fn identify_inverse_chain(
     let (mut model, report) = inverse_chain(voltage, displacement, &options, chain, &plant)?;
     let report = ChainReport {
         elapsed_s: started.elapsed().as_secs_f64(),
+        span: FittedSpan::of(chain, voltage.len()),
         ..report
     };
     model.identification = serde_json::to_value(&report).ok();
@@ -548,6 +577,7 @@ fn plant_chain(
             contributions,
             fit,
             elapsed_s: 0.0,
+            span: FittedSpan::default(),
         },
     })
 }
@@ -927,6 +957,7 @@ fn inverse_chain(
             contributions,
             fit,
             elapsed_s: 0.0,
+            span: FittedSpan::default(),
         },
     ))
 }

@@ -85,7 +85,7 @@ pub mod warmup;
 
 pub use chain::{
     ChainIdentification, ChainOptions, ChainReport, Contribution, CreepFit, CreepOptions,
-    identify_chain, identify_inverse_chain,
+    FittedSpan, identify_chain, identify_inverse_chain,
 };
 pub use chain_crossval::{ChainCrossValidation, crossval_chain};
 pub use crossval::{

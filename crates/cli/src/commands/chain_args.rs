@@ -230,6 +230,24 @@ pub fn check_record_rate(
 
 /// Prints what the chain's links contribute, for people.
 pub fn print_chain(report: &ChainReport, unit: &str) -> Result<(), CliError> {
+    let span = &report.span;
+    if span.record > 0 && (span.hysteresis_end < span.record || span.decimation > 1) {
+        let every = match span.decimation {
+            1 => "every sample".to_owned(),
+            k => format!("every {k} samples"),
+        };
+        outln!(
+            "  chain: the record has {} samples; the hysteresis{} fitted on samples 1 .. {} \
+             ({every}; the sample counts above are of those)",
+            span.record,
+            if report.creep.is_some() {
+                " and creep"
+            } else {
+                ""
+            },
+            span.hysteresis_end,
+        )?;
+    }
     if let Some(c) = &report.creep {
         outln!(
             "  creep: {} elements ({} .. {} s), weights sum {:.4} (a held step creeps to {:.4} \
