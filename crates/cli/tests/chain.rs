@@ -776,6 +776,16 @@ fn on_the_real_record_the_full_model_predicts_no_worse_than_hysteresis_alone() {
     assert_eq!(rows.len(), 3);
     assert!(rows[1] < 1.1 * rows[0], "{rows:?}");
     assert!(rows[2] < rows[0], "{rows:?}");
+    // Test samples outside the training ranges: for the chain, against the measured
+    // displacement (its inverse model's own input is the creep-free displacement, against
+    // which 3 080 of the 14 155 samples were once counted).
+    let outside = |j: &serde_json::Value| {
+        j["report"]["test"]["displacement_outside_model_range"]
+            .as_u64()
+            .unwrap()
+    };
+    assert!(outside(&hysteresis) < 50, "{}", outside(&hysteresis));
+    assert!(outside(&full) < 50, "{}", outside(&full));
     // The offline inverse replay of every compensator is computed for both (the full model's
     // is worse on this record, 2.46 against 1.79 % for IHC: README, real data).
     for j in [&hysteresis, &full] {

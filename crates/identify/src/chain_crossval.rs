@@ -47,7 +47,7 @@ pub fn crossval_chain(
         plant.report.hysteresis.input.min,
         plant.report.hysteresis.input.max,
     ];
-    let test_report = validate_models_from(
+    let mut test_report = validate_models_from(
         &plant.model,
         &inverse.model,
         limits,
@@ -56,6 +56,14 @@ pub fn crossval_chain(
         options.test_warmup,
         options.unstable_delay,
     )?;
+    // The inverse chain's hysteresis link takes the creep-free displacement, not the
+    // measured one: the test record is compared with the training record's measured range.
+    let (lo, hi) = crate::identification::min_max(train.displacement);
+    test_report.displacement_outside_model_range = test
+        .displacement
+        .iter()
+        .filter(|&&y| y < lo || y > hi)
+        .count();
     Ok(ChainCrossValidation {
         crossval: CrossValidation {
             report: CrossvalReport {

@@ -165,7 +165,9 @@ pub struct Validation {
     /// extrapolates there).
     pub voltage_outside_model_range: usize,
     /// Test samples whose displacement lies outside the inverse model's input range (DIHC
-    /// clamps them).
+    /// clamps them). For a chain (creep or vibration links), whose inverse model's input is
+    /// the creep-free displacement, outside the training record's measured displacement
+    /// range instead ([`crate::crossval_chain`]).
     pub displacement_outside_model_range: usize,
     /// The plant model's prediction of the measured displacement from the applied voltage, in
     /// % of the test record's displacement range over the evaluated span.
