@@ -438,7 +438,9 @@ impl ScaledCompensator {
         } else {
             Inner::Plain(inner)
         };
-        let desired_range = (method == Method::Dihc).then(|| {
+        // A chain's inverse model takes the creep-free displacement: its range is not the
+        // desired position's.
+        let desired_range = (method == Method::Dihc && !model.has_links()).then(|| {
             let (a, b) = (
                 desired.to_physical(model.input_range[0]),
                 desired.to_physical(model.input_range[1]),
@@ -552,7 +554,9 @@ impl ScaledCompensator {
 
     /// For `dihc`: the range of desired positions (physical units, increasing) the inverse
     /// model was identified on; DIHC clamps the desired position into it (eq. (10)). `None` for
-    /// the other methods.
+    /// the other methods, and for an inverse model with creep or vibration links (its
+    /// hysteresis link's input is the creep-free displacement, whose range the desired
+    /// positions' is not).
     pub fn desired_range(&self) -> Option<(f64, f64)> {
         self.desired_range
     }

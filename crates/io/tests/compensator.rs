@@ -4,7 +4,7 @@ use std::path::PathBuf;
 
 use hystcomp_core::CoreError;
 use hystcomp_io::compensator::{CompensatorError, Method, ScaledCompensator, UnstableDelay};
-use hystcomp_io::model_file::ModelFile;
+use hystcomp_io::model_file::{CreepPart, ModelFile};
 use proptest::prelude::*;
 use proptest::test_runner::{Config, RngSeed};
 
@@ -161,6 +161,19 @@ fn plant_methods_report_their_delayed_loop_gain_and_dihc_its_desired_range() {
     assert_eq!(dihc.desired_range(), Some((lo.min(hi), lo.max(hi))));
     assert_eq!(dihc.delayed_loop_gain(), None);
     assert_eq!(dihc.guard_relaxation(), None);
+    // An inverse chain's hysteresis link takes the creep-free displacement: no range of
+    // desired positions is claimed for it.
+    let mut chain = inverse.clone();
+    chain.format_version = 2;
+    chain.sample_rate_hz = Some(1000.0);
+    chain.creep = Some(CreepPart {
+        origin: 0.0,
+        time_constants_s: vec![0.1, 1.0],
+        weights: vec![0.02, 0.03],
+    });
+    chain.validate().unwrap();
+    let dihc = ScaledCompensator::new(&chain, Method::Dihc, None).unwrap();
+    assert_eq!(dihc.desired_range(), None);
 }
 
 #[test]
