@@ -155,6 +155,10 @@ pub enum CoreError {
         channels: usize,
         /// The number of values given.
         found: usize,
+        /// Whether the values are samples (a tick's or a whole signal's), which the message
+        /// then says may be a multiple of the channel count; else they are per channel, given
+        /// once (models, limits, input ranges).
+        samples: bool,
     },
 }
 
@@ -294,11 +298,21 @@ impl fmt::Display for CoreError {
                 what,
                 channels,
                 found,
-            } => write!(
-                f,
-                "{what} has {found} values, but a bank of {channels} channels needs one per \
-                 channel (a whole signal: a multiple of {channels}, sample after sample)"
-            ),
+                samples,
+            } => {
+                write!(
+                    f,
+                    "{what} has {found} values, but a bank of {channels} channels needs one per \
+                     channel"
+                )?;
+                if *samples {
+                    write!(
+                        f,
+                        " (a whole signal: a multiple of {channels}, sample after sample)"
+                    )?;
+                }
+                Ok(())
+            }
         }
     }
 }

@@ -72,7 +72,8 @@ mod wihc;
 pub use bank::Heap;
 pub use bank::{
     BankError, BankStorage, CompensatorBank, DihcBank, Fixed, IhcBank, LANES, MAX_BANK_VALUES,
-    MAX_CHANNELS, PLAIN_DEGREE, WihcBank, check_signal, check_tick, dihc_bank_rows, plant_bank_rows,
+    MAX_CHANNELS, PLAIN_DEGREE, WihcBank, check_signal, check_tick, dihc_bank_rows,
+    plant_bank_rows,
 };
 #[cfg(feature = "std")]
 pub use bank::{VectorPath, with_vector_path};

@@ -479,6 +479,7 @@ impl ScaledBank {
                 what: "drive limits (one pair for every channel, or one for each)",
                 channels,
                 found: l.len(),
+                samples: false,
             }));
         }
         let mode = match (method.solve_mode(), unstable) {

@@ -265,12 +265,19 @@ fn a_refused_channel_is_named_when_the_bank_is_built() {
     )
     .unwrap_err();
     assert!(err.to_string().contains("drive limits"), "{err}");
-    // Ticks of the wrong size.
+    // Limits are given once per channel, not per sample: no word of signals.
+    assert!(!err.to_string().contains("whole signal"), "{err}");
+    // Ticks of the wrong size: a whole signal may be a multiple of the channel count.
     let mut bank = ScaledBank::new(&set, Method::Ihc, None, UnstableDelay::Refuse).unwrap();
-    assert!(matches!(
-        bank.step(&[1.0, 2.0], &mut [0.0; 3]),
-        Err(CoreError::ChannelCount { found: 2, .. })
-    ));
+    let err = bank.step(&[1.0, 2.0], &mut [0.0; 3]).unwrap_err();
+    assert!(
+        matches!(err, CoreError::ChannelCount { found: 2, .. }),
+        "{err}"
+    );
+    assert!(
+        err.to_string().contains("a whole signal: a multiple of 3"),
+        "{err}"
+    );
     assert!(bank.process(&[1.0; 7], &mut [0.0; 7]).is_err());
     assert_eq!(bank.names(), ["x", "y", "z"]);
     assert_eq!(bank.desired_unit(1), Some("um"));

@@ -177,7 +177,8 @@ pub fn run(args: &Args, ctx: Context) -> Result<(), CliError> {
     }
     if args.desired_columns.is_some() {
         return Err(CliError::input(
-            "--desired-columns needs a model set (one model per column) as --model; give              --desired-column for one model",
+            "--desired-columns needs a model set (one model per column) as --model; give \
+             --desired-column for one model",
         ));
     }
     let model = ModelFile::load(&args.model)?;

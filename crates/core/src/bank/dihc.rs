@@ -47,6 +47,7 @@ impl<T: Real, S: BankStorage<T, W>, const W: usize> DihcBank<T, S, W> {
                 what: "input ranges (one for every channel, or one for each)",
                 channels,
                 found: input_ranges.len(),
+                samples: false,
             })
         })?;
         let n = inverse_models.iter().map(Mpim::len).max().unwrap_or(0);

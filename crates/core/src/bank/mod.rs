@@ -176,6 +176,7 @@ pub(crate) fn check_bank_size(channels: usize, limits: usize) -> Result<(), Bank
             what: "models",
             channels: 1,
             found: 0,
+            samples: false,
         }));
     }
     if channels > MAX_CHANNELS {
@@ -190,6 +191,7 @@ pub(crate) fn check_bank_size(channels: usize, limits: usize) -> Result<(), Bank
             what: "output limits (one pair for every channel, or one for each)",
             channels,
             found: limits,
+            samples: false,
         }));
     }
     Ok(())
@@ -208,6 +210,7 @@ pub(crate) fn limits_of<T: Real>(
             what: "output limits",
             channels: channel + 1,
             found: limits.len(),
+            samples: false,
         }))
 }
 
@@ -225,6 +228,7 @@ pub fn check_tick(
                 what,
                 channels,
                 found,
+                samples: true,
             });
         }
     }
@@ -244,6 +248,7 @@ pub fn check_signal(
             what: "desired positions",
             channels,
             found: desired,
+            samples: true,
         });
     }
     if control != desired {
