@@ -26,6 +26,7 @@ use hystcomp_core::{
     OutputLimits, SolveMode, WihcBank,
 };
 use serde_json::Value;
+use serde_json::value::RawValue;
 
 use crate::atomic::write_atomic;
 use crate::compensator::{CompensatorError, Method, UnstableDelay};
@@ -41,9 +42,33 @@ pub const MODEL_SET_VERSION: u32 = 1;
 /// actuators), checked before the channels are read.
 pub const MAX_CHANNELS: usize = 1 << 16;
 
-/// The largest model-set file read: 1 GiB (4 096 channels of 10 operators take about 6 MiB),
-/// checked while reading.
-pub const MAX_MODEL_SET_BYTES: u64 = 1 << 30;
+/// The largest model-set file read: 256 MiB (4 096 channels of 10 operators take about
+/// 6 MiB, [`MAX_CHANNELS`] of them about 100 MiB), checked while reading. Reading keeps the
+/// text and each channel's text (the channels are parsed one at a time), about three times
+/// the file's size, besides the models.
+pub const MAX_MODEL_SET_BYTES: u64 = 1 << 28;
+
+/// The fields of a JSON object, each kept as its text: a set's channels are parsed one at a
+/// time, never held as one tree of values (about twenty times the text's size).
+type RawFields = std::collections::BTreeMap<String, Box<RawValue>>;
+
+/// `text`'s top-level object, its fields as text; the message says what is wrong.
+fn raw_fields(text: &str) -> Result<RawFields, String> {
+    serde_json::from_str::<RawFields>(text).map_err(|e| {
+        match serde_json::from_str::<serde::de::IgnoredAny>(text) {
+            Ok(_) => format!(
+                "is not a JSON object; a model set is {{\"format\": \"{MODEL_SET_FORMAT}\", \
+                 \"format_version\": 1, \"channels\": [...]}}"
+            ),
+            Err(_) => format!("is not valid JSON: {e}"),
+        }
+    })
+}
+
+/// A small field's value (a name, a version): the text is valid JSON, parsed already once.
+fn small(raw: &RawValue) -> Value {
+    serde_json::from_str(raw.get()).unwrap_or(Value::Null)
+}
 
 /// One channel of a set: its name and its model file.
 #[derive(Debug, Clone, PartialEq)]
@@ -191,9 +216,8 @@ impl ModelSet {
         };
         let text = String::from_utf8(bytes)
             .map_err(|_| set_error("is not UTF-8 text; a model set is JSON".into()))?;
-        let value: Value = serde_json::from_str(&text)
-            .map_err(|e| set_error(format!("is not valid JSON: {e}")))?;
-        if value.get("format_version").is_some() && value.get("format").is_none() {
+        let fields = raw_fields(&text).map_err(set_error)?;
+        if fields.contains_key("format_version") && !fields.contains_key("format") {
             // One model file: a set of one channel, named by the file's stem.
             if u64::try_from(text.len()).unwrap_or(u64::MAX) > MAX_MODEL_FILE_BYTES {
                 return Err(set_error(format!(
@@ -215,24 +239,26 @@ impl ModelSet {
             )
             .map_err(|e| with_path(e, &shown));
         }
-        Self::from_value(&value).map_err(|e| with_path(e, &shown))
+        drop(text);
+        Self::from_fields(&fields).map_err(|e| with_path(e, &shown))
     }
 
     /// Parses a model-set file's text.
     pub fn from_json(text: &str) -> Result<Self, ModelSetError> {
-        let value: Value = serde_json::from_str(text).map_err(|e| ModelSetError::Set {
+        let fields = raw_fields(text).map_err(|message| ModelSetError::Set {
             path: "model set".into(),
-            message: format!("is not valid JSON: {e}"),
+            message,
         })?;
-        Self::from_value(&value)
+        Self::from_fields(&fields)
     }
 
-    fn from_value(value: &Value) -> Result<Self, ModelSetError> {
+    fn from_fields(fields: &RawFields) -> Result<Self, ModelSetError> {
         let set_error = |message: String| ModelSetError::Set {
             path: "model set".into(),
             message,
         };
-        match value.get("format").and_then(Value::as_str) {
+        let field = |name: &str| fields.get(name).map(|raw| small(raw));
+        match field("format").as_ref().and_then(Value::as_str) {
             Some(MODEL_SET_FORMAT) => {}
             Some(other) => {
                 return Err(set_error(format!(
@@ -247,7 +273,7 @@ impl ModelSet {
                 )));
             }
         }
-        match value.get("format_version").and_then(Value::as_u64) {
+        match field("format_version").as_ref().and_then(Value::as_u64) {
             Some(v) if v == u64::from(MODEL_SET_VERSION) => {}
             Some(v) => {
                 return Err(set_error(format!(
@@ -257,21 +283,22 @@ impl ModelSet {
             }
             None => return Err(set_error("has no integer \"format_version\" field".into())),
         }
-        if let Some(object) = value.as_object() {
-            let known = ["format", "format_version", "description", "channels"];
-            if let Some(unknown) = object.keys().find(|k| !known.contains(&k.as_str())) {
-                return Err(set_error(format!(
-                    "has an unknown field {unknown:?} (known: {})",
-                    known.join(", ")
-                )));
-            }
+        let known = ["format", "format_version", "description", "channels"];
+        if let Some(unknown) = fields.keys().find(|k| !known.contains(&k.as_str())) {
+            return Err(set_error(format!(
+                "has an unknown field {unknown:?} (known: {})",
+                known.join(", ")
+            )));
         }
-        let description = match value.get("description") {
+        let description = match field("description") {
             None | Some(Value::Null) => None,
-            Some(Value::String(s)) => Some(s.clone()),
+            Some(Value::String(s)) => Some(s),
             Some(_) => return Err(set_error("\"description\" is not a string".into())),
         };
-        let Some(list) = value.get("channels").and_then(Value::as_array) else {
+        let Some(list) = fields
+            .get("channels")
+            .and_then(|raw| serde_json::from_str::<Vec<Box<RawValue>>>(raw.get()).ok())
+        else {
             return Err(set_error("has no \"channels\" array".into()));
         };
         if list.len() > MAX_CHANNELS {
@@ -281,19 +308,23 @@ impl ModelSet {
             )));
         }
         let mut channels = Vec::with_capacity(list.len());
-        for (k, entry) in list.iter().enumerate() {
-            let name = match entry.get("name") {
+        for (k, raw) in list.iter().enumerate() {
+            let entry: RawFields = serde_json::from_str(raw.get()).map_err(|_| {
+                set_error(format!(
+                    "channel {k}: not an object (a channel is {{\"name\": ..., \"model\": \
+                     {{...}}}})"
+                ))
+            })?;
+            let name = match entry.get("name").map(|raw| small(raw)) {
                 None | Some(Value::Null) => format!("channel_{k}"),
-                Some(Value::String(s)) if !s.trim().is_empty() => s.clone(),
+                Some(Value::String(s)) if !s.trim().is_empty() => s,
                 Some(_) => {
                     return Err(set_error(format!(
                         "channel {k}: \"name\" is not a non-empty string"
                     )));
                 }
             };
-            if let Some(object) = entry.as_object()
-                && let Some(unknown) = object.keys().find(|k| *k != "name" && *k != "model")
-            {
+            if let Some(unknown) = entry.keys().find(|k| *k != "name" && *k != "model") {
                 return Err(set_error(format!(
                     "channel {k} ({name}): unknown field {unknown:?} (a channel is {{\"name\": \
                      ..., \"model\": {{...}}}})"
@@ -304,12 +335,18 @@ impl ModelSet {
                     "channel {k} ({name}): no \"model\" object (a whole model file's object)"
                 )));
             };
-            let model =
-                ModelFile::from_json(&model.to_string()).map_err(|error| ModelSetError::File {
-                    channel: k,
-                    name: name.clone(),
-                    error,
-                })?;
+            if u64::try_from(model.get().len()).unwrap_or(u64::MAX) > MAX_MODEL_FILE_BYTES {
+                return Err(set_error(format!(
+                    "channel {k} ({name}): its model is larger than the {} MiB a model file \
+                     may be",
+                    MAX_MODEL_FILE_BYTES >> 20
+                )));
+            }
+            let model = ModelFile::from_json(model.get()).map_err(|error| ModelSetError::File {
+                channel: k,
+                name: name.clone(),
+                error,
+            })?;
             channels.push(Channel { name, model });
         }
         Self::new(description, channels)

@@ -179,6 +179,24 @@ fn bad_sets_are_refused_naming_the_channel() {
         set_error(r#"{"format": "hystcomp-model-set", "format_version": 1, "chanels": []}"#)
             .contains("unknown field")
     );
+    // Not JSON, JSON that is not an object, a channel that is not an object, a channel's
+    // model beyond a model file's 16 MiB (refused before it is parsed).
+    assert!(set_error("{\"format\": ").contains("is not valid JSON"));
+    assert!(set_error("[1, 2]").contains("is not a JSON object"));
+    assert!(
+        set_error(r#"{"format": "hystcomp-model-set", "format_version": 1, "channels": [3]}"#)
+            .contains("channel 0: not an object")
+    );
+    let huge = format!(
+        r#"{{"format": "hystcomp-model-set", "format_version": 1, "channels": [{{"name": "a", "model": {{"pad": "{}"}}}}]}}"#,
+        "p".repeat(17 << 20)
+    );
+    let message = set_error(&huge);
+    assert!(
+        message.contains("channel 0 (a): its model is larger than the 16 MiB"),
+        "{}",
+        &message[..message.len().min(300)]
+    );
     let mut twice: serde_json::Value = serde_json::from_str(&good).unwrap();
     twice["channels"][2]["name"] = serde_json::json!("x");
     assert!(set_error(&twice.to_string()).contains("used twice"));
