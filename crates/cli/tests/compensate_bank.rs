@@ -145,6 +145,94 @@ fn each_channel_is_its_own_model_compensated_alone() {
 }
 
 #[test]
+fn each_channel_takes_its_own_drive_limits() {
+    let dir = tempfile::tempdir().unwrap();
+    let desired = trajectory(dir.path(), ["x", "y", "z"]);
+    let set_file = models().join("table1-xyz-set.json");
+    let run = |limits: &str, out: &Path| {
+        hystcomp(&[
+            "--json",
+            "compensate",
+            "--model",
+            s(&set_file),
+            "--method",
+            "ihc",
+            "--desired",
+            s(&desired),
+            "--limits",
+            limits,
+            "--allow-saturation",
+            "-o",
+            s(out),
+        ])
+    };
+    // One pair per channel, each kept: the report's limits and the drives within them.
+    let out = dir.path().join("drive.csv");
+    let output = run("0:10,0:6,1:5", &out);
+    assert!(output.status.success(), "{}", stderr(&output));
+    let report: serde_json::Value = serde_json::from_str(&stdout(&output)).unwrap();
+    let drives = columns(&out, 4);
+    for (c, (lo, hi)) in [(0.0, 10.0), (0.0, 6.0), (1.0, 5.0)]
+        .into_iter()
+        .enumerate()
+    {
+        assert_eq!(report["channels"][c]["limits"][0].as_f64(), Some(lo), "{c}");
+        assert_eq!(report["channels"][c]["limits"][1].as_f64(), Some(hi), "{c}");
+        assert!(
+            drives[c + 1].iter().all(|v| (lo..=hi).contains(v)),
+            "channel {c} leaves {lo} .. {hi}"
+        );
+    }
+    // One pair: every channel's.
+    let shared = dir.path().join("shared.csv");
+    let output = run("0:6", &shared);
+    assert!(output.status.success(), "{}", stderr(&output));
+    assert_eq!(columns(&shared, 4)[2], drives[2]);
+    // Two pairs for three channels, or two for one model: refused, nothing written.
+    let refused = dir.path().join("refused.csv");
+    assert_fails(
+        &[
+            "compensate",
+            "--model",
+            s(&set_file),
+            "--method",
+            "ihc",
+            "--desired",
+            s(&desired),
+            "--limits",
+            "0:10,0:6",
+            "-o",
+            s(&refused),
+        ],
+        &["drive limits", "3 channels"],
+    );
+    let model = dir.path().join("x.json");
+    ModelSet::load(&set_file).unwrap().channels[0]
+        .model
+        .save(&model)
+        .unwrap();
+    assert_fails(
+        &[
+            "compensate",
+            "--model",
+            s(&model),
+            "--method",
+            "ihc",
+            "--desired",
+            s(&desired),
+            "--desired-column",
+            "2",
+            "--limits",
+            "0:10,0:6",
+            "-o",
+            s(&refused),
+        ],
+        &["--limits gives 2 pairs for one model"],
+    );
+    assert!(!refused.exists());
+}
+
+#[test]
 fn a_model_set_directory_holds_no_output() {
     let dir = tempfile::tempdir().unwrap();
     let desired = trajectory(dir.path(), ["x", "y", "z"]);

@@ -53,9 +53,17 @@ pub struct Args {
     #[arg(long, default_value = "auto")]
     header: Header,
     /// Drive limits MIN:MAX in the model's voltage unit (default: the voltage range the model
-    /// was identified on). The compensator never leaves them.
-    #[arg(long, value_name = "MIN:MAX", value_parser = parse_limits, allow_hyphen_values = true)]
-    limits: Option<(f64, f64)>,
+    /// was identified on). The compensator never leaves them. With a model set, one pair for
+    /// every channel or one per channel, comma-separated in the set's channel order (e.g.
+    /// 0:10,0:10,-5:5), each in its channel's voltage unit.
+    #[arg(
+        long,
+        value_name = "MIN:MAX[,...]",
+        value_parser = parse_limits,
+        value_delimiter = ',',
+        allow_hyphen_values = true
+    )]
+    limits: Option<Vec<(f64, f64)>>,
     /// Stage file whose amplifier the drive is checked against before anything is driven (slew
     /// rate into the stack's capacitance, rails, bandwidth); default: the built-in stage's.
     #[arg(long, value_name = "FILE")]
@@ -190,10 +198,21 @@ pub fn run(args: &Args, ctx: Context) -> Result<(), CliError> {
             "samples",
         )?;
     }
+    let limits = match args.limits.as_deref() {
+        None => None,
+        Some([one]) => Some(*one),
+        Some(many) => {
+            return Err(CliError::input(format!(
+                "--limits gives {} pairs for one model; give one MIN:MAX (a model set takes one \
+                 pair per channel)",
+                many.len()
+            )));
+        }
+    };
     let mut compensator = ScaledCompensator::with_options(
         &model,
         args.method,
-        args.limits,
+        limits,
         args.preview,
         args.unstable_delay(),
     )

@@ -114,7 +114,7 @@ pub(super) fn run(args: &Args, ctx: Context) -> Result<(), CliError> {
              compensates the hysteresis of each channel only",
         ));
     }
-    let limits = args.limits.map(|l| vec![l]);
+    let limits = args.limits.clone();
     let mut bank = ScaledBank::new(&set, args.method, limits.as_deref(), args.unstable_delay())
         .map_err(|e| match e {
             hystcomp_io::bank::ModelSetError::Channel {
