@@ -361,6 +361,30 @@ fn bad_input_names_the_channel() {
         stderr(&output)
     );
     assert!(out.exists());
+    // --desired-columns naming the time column, or one column twice: refused.
+    for (columns, expected) in [
+        ("1,2,3", "is the time column"),
+        ("2,2,3", "read the same column"),
+        ("x,y,x", "read the same column"),
+    ] {
+        assert_fails(
+            &[
+                "compensate",
+                "--model",
+                s(&set_file),
+                "--method",
+                "ihc",
+                "--desired",
+                s(&desired),
+                "--desired-columns",
+                columns,
+                "-o",
+                s(&dir.path().join("columns.csv")),
+            ],
+            &[expected],
+        );
+    }
+    assert!(!dir.path().join("columns.csv").exists());
     // --desired-columns without a set.
     assert_fails(
         &[

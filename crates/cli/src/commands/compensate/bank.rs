@@ -96,7 +96,32 @@ fn read_trajectory(
             }
         }
     };
-    Ok(read(desired)?)
+    let record = read(desired)?;
+    // One column per channel, none of them the time column (a channel driven by the clock,
+    // or two channels sharing a trajectory, is almost certainly a wrong index).
+    let Some((time, channels)) = record.names.split_first() else {
+        return Ok(record);
+    };
+    let names = set.names();
+    let channel = |c: usize| names.get(c).copied().unwrap_or("?");
+    for (c, name) in channels.iter().enumerate() {
+        if name == time {
+            return Err(CliError::input(format!(
+                "the desired column of channel {c} ({}) is the time column {name}: give the \
+                 channels' own columns",
+                channel(c)
+            )));
+        }
+        if let Some(d) = channels[..c].iter().position(|other| other == name) {
+            return Err(CliError::input(format!(
+                "channels {d} ({}) and {c} ({}) read the same column {name}: give one column \
+                 per channel",
+                channel(d),
+                channel(c)
+            )));
+        }
+    }
+    Ok(record)
 }
 
 /// Runs `hystcomp compensate` with a model set.
