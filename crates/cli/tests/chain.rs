@@ -369,6 +369,35 @@ fn identify_compensate_and_crossval_take_the_full_model() {
         mine.contains(&"chain-ihc") && mine.contains(&"ihc"),
         "{mine:?}"
     );
+    // ... and an inverse chain's around DIHC.
+    let inverse = dir.path().join("inverse.json");
+    let mut args = identify_args(&data, &inverse, &from, &to);
+    args.extend(["--direction", "inverse"]);
+    let out = hystcomp(&args);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let out = hystcomp(&[
+        "--json",
+        "bench",
+        "--samples",
+        "500",
+        "--repeats",
+        "1",
+        "--model",
+        s(&inverse),
+    ]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let json: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    let mine: Vec<&str> = json["figures"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .filter(|f| f["model"] == s(&inverse))
+        .map(|f| f["what"].as_str().unwrap())
+        .collect();
+    assert!(
+        mine.contains(&"chain-dihc") && mine.contains(&"dihc"),
+        "{mine:?}"
+    );
 
     // crossval: the chains' reports beside the usual one.
     let crossval = |test: &Path| -> Vec<String> {

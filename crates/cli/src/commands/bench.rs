@@ -30,7 +30,8 @@ pub struct Args {
     #[arg(long, default_value_t = 15)]
     repeats: usize,
     /// Also time this model file (its own operator count): a plant model times the forward
-    /// model, IHC and WIHC; an inverse model times DIHC. Not with --channels.
+    /// model, IHC and WIHC; an inverse model times DIHC; with creep or vibration links, also
+    /// the whole chain around IHC or DIHC. Not with --channels.
     #[arg(long, value_name = "FILE")]
     model: Option<PathBuf>,
     /// Time the compensator banks instead, for these channel counts (comma-separated, each 1
@@ -73,8 +74,8 @@ struct Figure {
     /// for the built-in models also the chain's links (`creep-inverse`, `vibration-inverse`,
     /// each alone, per sample) and `chain-ihc` (vibration inverse with a preview of 8 samples,
     /// creep inverse and exact IHC: the links of `hystcomp_core::reference`); for a model file
-    /// with creep or vibration parts, `chain-ihc` with its own links (the preview an offline
-    /// inversion needs).
+    /// with creep or vibration parts, `chain-ihc` (a plant model) or `chain-dihc` (an inverse
+    /// model) with its own links (the preview an offline inversion needs).
     what: &'static str,
     /// Where the model came from: `table1` / `table2` spread over `operators`, or the file.
     model: String,
@@ -282,22 +283,36 @@ impl Bench {
         Ok(())
     }
 
-    /// The chain of a model file with creep or vibration parts around the exact IHC, in the
-    /// file's physical units, over the bench's trajectory mapped onto its output scale.
+    /// The chain of a model file with creep or vibration parts around the exact IHC (a plant
+    /// model) or DIHC (an inverse model), in the file's physical units: for IHC the bench's
+    /// trajectory mapped onto the plant's output scale, for DIHC the inverse bench's desired
+    /// positions onto the inverse model's input scale.
     fn file_chain(
         &mut self,
         name: &str,
         file: &ModelFile,
-        plant: &Mpim<f64, Vec<f64>>,
+        model: &Mpim<f64, Vec<f64>>,
     ) -> Result<(), CliError> {
-        let (_, desired) = trajectory(plant, self.samples);
-        let desired: Vec<f64> = desired
-            .iter()
-            .map(|&y| file.output_to_physical(y))
-            .collect();
+        let (method, figure, desired): (_, _, Vec<f64>) = match file.direction {
+            Direction::Plant => {
+                let (_, desired) = trajectory(model, self.samples);
+                let desired = desired
+                    .iter()
+                    .map(|&y| file.output_to_physical(y))
+                    .collect();
+                (Method::Ihc, "chain-ihc", desired)
+            }
+            Direction::Inverse => (
+                Method::Dihc,
+                "chain-dihc",
+                (0..self.samples)
+                    .map(|k| file.input.to_physical(0.5 + 0.45 * (k as f64 * 6e-4).sin()))
+                    .collect(),
+            ),
+        };
         let mut out = vec![0.0; self.samples];
-        let mut chain = ScaledCompensator::new(file, Method::Ihc, None)?;
-        self.record("chain-ihc", name, plant.len(), "f64", || {
+        let mut chain = ScaledCompensator::new(file, method, None)?;
+        self.record(figure, name, model.len(), "f64", || {
             chain.reset();
             for (y, o) in desired.iter().zip(out.iter_mut()) {
                 *o = chain.step(black_box(*y));
@@ -397,7 +412,12 @@ pub fn run(args: &Args, ctx: Context) -> Result<(), CliError> {
                     bench.file_chain(&name, file, &model)?;
                 }
             }
-            Direction::Inverse => bench.inverse::<f64>(&name, &model, "f64")?,
+            Direction::Inverse => {
+                bench.inverse::<f64>(&name, &model, "f64")?;
+                if file.has_links() {
+                    bench.file_chain(&name, file, &model)?;
+                }
+            }
         }
     }
     let report = Report {
