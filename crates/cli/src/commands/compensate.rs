@@ -281,37 +281,31 @@ pub fn run(args: &Args, ctx: Context) -> Result<(), CliError> {
     for k in 0..n + p {
         let d = inverted[k.min(n - 1)];
         let drive = compensator.step(d);
-        let Some(at) = k.checked_sub(p) else {
-            // The preview filling: a clamp here shapes the first samples' drive.
-            let after = compensator.diagnostics();
-            if after.saturated > before.saturated && first_unreachable.is_none() {
-                first_unreachable = time.first().copied();
-            }
-            if after.loop_saturated > before.loop_saturated && first_loop.is_none() {
-                first_loop = time.first().copied();
-            }
-            before = after;
-            continue;
-        };
-        control[at] = drive;
+        // While the preview fills (k < p) no drive sample is written yet, but a clamp then
+        // shapes the first samples' drive: it is dated at the trajectory's start.
+        let at = k.checked_sub(p);
         let after = compensator.diagnostics();
-        if after.non_finite > before.non_finite {
-            // The drive held its previous value: never written as if it were a result.
-            return Err(CliError::input(format!(
-                "{}, row {}: the desired position {d} {} is not finite once normalised by the \
-                 model ({}); the drive would hold its previous value there. Check the \
-                 trajectory's unit against the model's",
-                args.trajectory.display(),
-                columns.file_row(k.min(n - 1) + 1),
-                compensator.desired_unit(),
-                args.model.display()
-            )));
+        if let Some(at) = at {
+            control[at] = drive;
+            if after.non_finite > before.non_finite {
+                // The drive held its previous value: never written as if it were a result.
+                return Err(CliError::input(format!(
+                    "{}, row {}: the desired position {d} {} is not finite once normalised by \
+                     the model ({}); the drive would hold its previous value there. Check the \
+                     trajectory's unit against the model's",
+                    args.trajectory.display(),
+                    columns.file_row(k.min(n - 1) + 1),
+                    compensator.desired_unit(),
+                    args.model.display()
+                )));
+            }
         }
+        let when = time.get(at.unwrap_or(0)).copied();
         if after.saturated > before.saturated && first_unreachable.is_none() {
-            first_unreachable = Some(time[at]);
+            first_unreachable = when;
         }
         if after.loop_saturated > before.loop_saturated && first_loop.is_none() {
-            first_loop = Some(time[at]);
+            first_loop = when;
         }
         before = after;
     }
