@@ -342,60 +342,45 @@ fn identify_compensate_and_crossval_take_the_full_model() {
     band_limited_inversion(dir.path(), &plant, &fast, &stage);
     slew_constrained_drive(dir.path(), &plant, &fast, &stage, &config);
 
-    // bench: the model file's own chain timed beside its hysteresis compensators.
-    let out = hystcomp(&[
-        "--json",
-        "bench",
-        "--samples",
-        "500",
-        "--repeats",
-        "1",
-        "--model",
-        s(&plant),
-    ]);
-    assert!(out.status.success(), "{}", stderr(&out));
-    let json: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
-    let mine: Vec<&str> = json["figures"]
-        .as_array()
-        .unwrap()
-        .iter()
-        .filter(|f| f["model"] == s(&plant))
-        .map(|f| {
-            assert!(f["median_ns_per_sample"].as_f64().unwrap() > 0.0, "{f}");
-            f["what"].as_str().unwrap()
-        })
-        .collect();
+    // bench: the model file's own chain timed beside its hysteresis compensators, for a
+    // plant (around IHC) and an inverse model (around DIHC).
+    let timed = |model: &Path| -> Vec<String> {
+        let out = hystcomp(&[
+            "--json",
+            "bench",
+            "--samples",
+            "500",
+            "--repeats",
+            "1",
+            "--model",
+            s(model),
+        ]);
+        assert!(out.status.success(), "{}", stderr(&out));
+        let json: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+        json["figures"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .filter(|f| f["model"] == s(model))
+            .map(|f| {
+                assert!(f["median_ns_per_sample"].as_f64().unwrap() > 0.0, "{f}");
+                f["what"].as_str().unwrap().to_owned()
+            })
+            .collect()
+    };
+    let mine = timed(&plant);
     assert!(
-        mine.contains(&"chain-ihc") && mine.contains(&"ihc"),
+        mine.iter().any(|w| w == "chain-ihc") && mine.iter().any(|w| w == "ihc"),
         "{mine:?}"
     );
-    // ... and an inverse chain's around DIHC.
     let inverse = dir.path().join("inverse.json");
     let mut args = identify_args(&data, &inverse, &from, &to);
     args.extend(["--direction", "inverse"]);
     let out = hystcomp(&args);
     assert!(out.status.success(), "{}", stderr(&out));
-    let out = hystcomp(&[
-        "--json",
-        "bench",
-        "--samples",
-        "500",
-        "--repeats",
-        "1",
-        "--model",
-        s(&inverse),
-    ]);
-    assert!(out.status.success(), "{}", stderr(&out));
-    let json: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
-    let mine: Vec<&str> = json["figures"]
-        .as_array()
-        .unwrap()
-        .iter()
-        .filter(|f| f["model"] == s(&inverse))
-        .map(|f| f["what"].as_str().unwrap())
-        .collect();
+    let mine = timed(&inverse);
     assert!(
-        mine.contains(&"chain-dihc") && mine.contains(&"dihc"),
+        mine.iter().any(|w| w == "chain-dihc") && mine.iter().any(|w| w == "dihc"),
         "{mine:?}"
     );
 

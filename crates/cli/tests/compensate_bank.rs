@@ -43,6 +43,28 @@ fn trajectory(dir: &Path, names: [&str; 3]) -> PathBuf {
     path
 }
 
+/// `compensate --model MODEL --method ihc --desired DESIRED -o OUT`, then `extra`.
+fn ihc_args<'a>(
+    model: &'a Path,
+    desired: &'a Path,
+    out: &'a Path,
+    extra: &[&'a str],
+) -> Vec<&'a str> {
+    let mut args = vec![
+        "compensate",
+        "--model",
+        s(model),
+        "--method",
+        "ihc",
+        "--desired",
+        s(desired),
+        "-o",
+        s(out),
+    ];
+    args.extend(extra);
+    args
+}
+
 fn columns(path: &Path, count: usize) -> Vec<Vec<f64>> {
     let wanted: Vec<Column> = (1..=count).map(Column::Index).collect();
     read_columns(path, &wanted, &ReadOptions::default())
@@ -56,17 +78,7 @@ fn each_channel_is_its_own_model_compensated_alone() {
     let desired = trajectory(dir.path(), ["x", "y", "z"]);
     let set_file = models().join("table1-xyz-set.json");
     let out = dir.path().join("drive.csv");
-    let output = hystcomp(&[
-        "compensate",
-        "--model",
-        s(&set_file),
-        "--method",
-        "ihc",
-        "--desired",
-        s(&desired),
-        "-o",
-        s(&out),
-    ]);
+    let output = hystcomp(&ihc_args(&set_file, &desired, &out, &[]));
     assert!(output.status.success(), "{}", stderr(&output));
     assert!(
         stdout(&output).contains("3 channels"),
@@ -88,19 +100,12 @@ fn each_channel_is_its_own_model_compensated_alone() {
         let model = dir.path().join(format!("{}.json", channel.name));
         channel.model.save(&model).unwrap();
         let single = dir.path().join(format!("single_{}.csv", channel.name));
-        let output = hystcomp(&[
-            "compensate",
-            "--model",
-            s(&model),
-            "--method",
-            "ihc",
-            "--desired",
-            s(&desired),
-            "--desired-column",
-            &(c + 2).to_string(),
-            "-o",
-            s(&single),
-        ]);
+        let output = hystcomp(&ihc_args(
+            &model,
+            &desired,
+            &single,
+            &["--desired-column", &(c + 2).to_string()],
+        ));
         assert!(output.status.success(), "{}", stderr(&output));
         let alone = columns(&single, 2);
         assert_eq!(bank[c + 1], alone[1], "channel {c}");
@@ -128,19 +133,12 @@ fn each_channel_is_its_own_model_compensated_alone() {
     assert_eq!(columns(&out2, 4)[1..], bank[1..4]);
     // --desired-columns in another order: channel x reads column c (z's trajectory).
     let out3 = dir.path().join("drive3.csv");
-    let output = hystcomp(&[
-        "compensate",
-        "--model",
-        s(&set_file),
-        "--method",
-        "ihc",
-        "--desired",
-        s(&other),
-        "--desired-columns",
-        "a,b,c",
-        "-o",
-        s(&out3),
-    ]);
+    let output = hystcomp(&ihc_args(
+        &set_file,
+        &other,
+        &out3,
+        &["--desired-columns", "a,b,c"],
+    ));
     assert!(output.status.success(), "{}", stderr(&output));
 }
 
@@ -191,19 +189,7 @@ fn each_channel_takes_its_own_drive_limits() {
     // Two pairs for three channels, or two for one model: refused, nothing written.
     let refused = dir.path().join("refused.csv");
     assert_fails(
-        &[
-            "compensate",
-            "--model",
-            s(&set_file),
-            "--method",
-            "ihc",
-            "--desired",
-            s(&desired),
-            "--limits",
-            "0:10,0:6",
-            "-o",
-            s(&refused),
-        ],
+        &ihc_args(&set_file, &desired, &refused, &["--limits", "0:10,0:6"]),
         &["drive limits", "3 channels"],
     );
     let model = dir.path().join("x.json");
@@ -212,21 +198,12 @@ fn each_channel_takes_its_own_drive_limits() {
         .save(&model)
         .unwrap();
     assert_fails(
-        &[
-            "compensate",
-            "--model",
-            s(&model),
-            "--method",
-            "ihc",
-            "--desired",
-            s(&desired),
-            "--desired-column",
-            "2",
-            "--limits",
-            "0:10,0:6",
-            "-o",
-            s(&refused),
-        ],
+        &ihc_args(
+            &model,
+            &desired,
+            &refused,
+            &["--desired-column", "2", "--limits", "0:10,0:6"],
+        ),
         &["--limits gives 2 pairs for one model"],
     );
     assert!(!refused.exists());
@@ -253,17 +230,7 @@ fn a_model_set_directory_holds_no_output() {
     // a channel): refused, nothing written.
     for out in [set_dir.join("x.json"), set_dir.join("drive.csv")] {
         assert_fails(
-            &[
-                "compensate",
-                "--model",
-                s(&set_dir),
-                "--method",
-                "ihc",
-                "--desired",
-                s(&desired),
-                "-o",
-                s(&out),
-            ],
+            &ihc_args(&set_dir, &desired, &out, &[]),
             &["lies inside --model"],
         );
     }
@@ -277,17 +244,7 @@ fn a_model_set_directory_holds_no_output() {
     }
     // Beside the directory: written.
     let out = dir.path().join("drive.csv");
-    let output = hystcomp(&[
-        "compensate",
-        "--model",
-        s(&set_dir),
-        "--method",
-        "ihc",
-        "--desired",
-        s(&desired),
-        "-o",
-        s(&out),
-    ]);
+    let output = hystcomp(&ihc_args(&set_dir, &desired, &out, &[]));
     assert!(output.status.success(), "{}", stderr(&output));
     assert_eq!(columns(&out, 7).len(), 7);
 }
@@ -300,19 +257,7 @@ fn bad_input_names_the_channel() {
     let out = dir.path().join("drive.csv");
     // Two columns named for three channels.
     assert_fails(
-        &[
-            "compensate",
-            "--model",
-            s(&set_file),
-            "--method",
-            "ihc",
-            "--desired",
-            s(&desired),
-            "--desired-columns",
-            "x,y",
-            "-o",
-            s(&out),
-        ],
+        &ihc_args(&set_file, &desired, &out, &["--desired-columns", "x,y"]),
         &["--desired-columns", "3 channels"],
     );
     // A plant set for DIHC: channel 0 named.
@@ -342,17 +287,7 @@ fn bad_input_names_the_channel() {
         &[&time, &ok, &beyond, &ok],
     )
     .unwrap();
-    let output = hystcomp(&[
-        "compensate",
-        "--model",
-        s(&set_file),
-        "--method",
-        "ihc",
-        "--desired",
-        s(&far),
-        "-o",
-        s(&out),
-    ]);
+    let output = hystcomp(&ihc_args(&set_file, &far, &out, &[]));
     assert_eq!(output.status.code(), Some(4), "{}", stderr(&output));
     assert!(stderr(&output).contains("channel y"), "{}", stderr(&output));
     assert!(
