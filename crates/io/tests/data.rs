@@ -10,8 +10,8 @@ use std::path::PathBuf;
 
 use hystcomp_io::data::{
     Column, DataError, Delimiter, Header, MAX_MAGNITUDE, ReadOptions, RowRange, check_finite,
-    check_min_samples, check_not_constant, check_same_length, check_time_increasing, read_columns,
-    write_csv, write_delimited,
+    check_min_samples, check_not_constant, check_same_length, check_time_increasing,
+    mean_time_step, read_columns, write_csv, write_delimited,
 };
 use proptest::prelude::*;
 
@@ -843,6 +843,34 @@ fn time_must_increase_strictly() {
         matches!(error, DataError::NotFinite { row: 2, .. }),
         "{error:?}"
     );
+}
+
+proptest! {
+    #![proptest_config(seeded(64, 0x6d65_616e_5f73_7465))]
+
+    /// The mean time step against its plain reference, the mean of the sample-to-sample steps
+    /// (a telescoping sum: equal up to rounding), on jittered grids of 2 to 200 samples.
+    #[test]
+    fn mean_time_step_is_the_mean_of_the_steps(
+        start in -1e3f64..1e3,
+        steps in prop::collection::vec(1e-4f64..1.0, 1..200),
+    ) {
+        let mut time = vec![start];
+        for h in &steps {
+            time.push(time[time.len() - 1] + h);
+        }
+        let reference = (time.windows(2).map(|w| w[1] - w[0]).sum::<f64>()) / steps.len() as f64;
+        let step = mean_time_step(&time).expect("two or more samples");
+        prop_assert!((step - reference).abs() <= 1e-9 * (1.0 + start.abs()), "{step} {reference}");
+    }
+}
+
+#[test]
+fn mean_time_step_needs_two_samples() {
+    assert_eq!(mean_time_step(&[]), None);
+    assert_eq!(mean_time_step(&[3.0]), None);
+    assert_eq!(mean_time_step(&[1.0, 1.5]), Some(0.5));
+    assert_eq!(mean_time_step(&[0.0, 0.1, 0.5]), Some(0.25));
 }
 
 #[test]

@@ -2,6 +2,7 @@
 //! chain hysteresis -> creep -> vibration, `hystcomp_identify::chain`).
 
 use hystcomp_identify::{ChainOptions, ChainReport, CreepOptions, DynamicsOptions};
+use hystcomp_io::data;
 use hystcomp_io::model_file::ModelFile;
 
 use super::identify::{ColumnArgs, Loaded};
@@ -167,13 +168,11 @@ impl ChainArgs {
 
 /// The record's sample rate: from the time column (its mean step), or --sample-rate.
 fn sample_rate(columns: &ColumnArgs, loaded: &Loaded) -> Result<f64, CliError> {
-    if let Some(time) = &loaded.time
-        && time.len() >= 2
+    if let Some(step) = loaded.time.as_deref().and_then(data::mean_time_step)
+        && step > 0.0
+        && step.is_finite()
     {
-        let step = (time[time.len() - 1] - time[0]) / (time.len() - 1) as f64;
-        if step > 0.0 && step.is_finite() {
-            return Ok(1.0 / step);
-        }
+        return Ok(1.0 / step);
     }
     match columns.sample_rate {
         Some(rate) if rate.is_finite() && rate > 0.0 => Ok(rate),

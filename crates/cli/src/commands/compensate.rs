@@ -241,8 +241,7 @@ pub fn run(args: &Args, ctx: Context) -> Result<(), CliError> {
     let (time, desired) = (&columns.values[0], &columns.values[1]);
     data::check_time_increasing(time)
         .map_err(|e| CliError::from(e).context(args.trajectory.display()))?;
-    if time.len() >= 2 {
-        let step = (time[time.len() - 1] - time[0]) / (time.len() - 1) as f64;
+    if let Some(step) = data::mean_time_step(time) {
         super::chain_args::check_model_rate(&model, 1.0 / step, "the trajectory")
             .map_err(|e| e.context(args.trajectory.display()))?;
     }
@@ -510,12 +509,9 @@ fn clamped(mut message: String, advice: &str, allow_saturation: bool) -> Result<
 /// feasibility check holds each drive sample for this long, as a DAC updated at the
 /// trajectory's rate does.
 fn drive_period_s(time: &[f64], stage: &hystcomp_stage::StageConfig) -> f64 {
-    match (time.first(), time.last()) {
-        (Some(first), Some(last)) if time.len() >= 2 && last > first => {
-            (last - first) / (time.len() - 1) as f64
-        }
-        _ => 1.0 / stage.sample_rate_hz,
-    }
+    data::mean_time_step(time)
+        .filter(|step| *step > 0.0)
+        .unwrap_or(1.0 / stage.sample_rate_hz)
 }
 
 /// The message for desired positions out of the model's reach, per method.

@@ -5,7 +5,7 @@ use std::path::PathBuf;
 
 use hystcomp_identify::{CrossvalOptions, IdentifyError, Record, TestStart, Warmup, crossval};
 use hystcomp_io::compensator::UnstableDelay;
-use hystcomp_io::data::{Column, RowRange};
+use hystcomp_io::data::{self, Column, RowRange};
 use hystcomp_io::model_file::Direction;
 use serde::Serialize;
 
@@ -238,16 +238,15 @@ pub fn run(args: &Args, ctx: Context) -> Result<(), CliError> {
     let chain_options = args.chain.options(c, &train)?;
     if let (Some(chain), Some(time)) = (&chain_options, &test.time) {
         // The vibration link is a discrete model at the training record's rate.
-        if time.len() >= 2 {
-            let step = (time[time.len() - 1] - time[0]) / (time.len() - 1) as f64;
-            if ((1.0 / step) / chain.sample_rate_hz - 1.0).abs() > 1e-3 {
-                return Err(CliError::input(format!(
-                    "the test record is sampled at {} Hz, the training record at {} Hz; \
+        if let Some(step) = data::mean_time_step(time)
+            && ((1.0 / step) / chain.sample_rate_hz - 1.0).abs() > 1e-3
+        {
+            return Err(CliError::input(format!(
+                "the test record is sampled at {} Hz, the training record at {} Hz; \
                      creep and vibration are identified at one rate: resample one of them",
-                    crate::number(1.0 / step),
-                    crate::number(chain.sample_rate_hz)
-                )));
-            }
+                crate::number(1.0 / step),
+                crate::number(chain.sample_rate_hz)
+            )));
         }
     }
     let result = match &chain_options {

@@ -141,11 +141,7 @@ fn last_period(values: &[Vec<f64>], period: f64, has_time: bool) -> Result<usize
     }
     let t = &values[1];
     let span = t.last().copied().unwrap_or(0.0) - t.first().copied().unwrap_or(0.0);
-    let step = if t.len() > 1 {
-        span / (t.len() - 1) as f64
-    } else {
-        0.0
-    };
+    let step = data::mean_time_step(t).unwrap_or(0.0);
     if step.is_nan() || step <= 0.0 || period > span + step * 0.5 {
         return Err(CliError::input(format!(
             "--period {period} s is longer than the record ({} s)",

@@ -210,13 +210,12 @@ fn read_desired(args: &Args) -> Result<(Vec<f64>, Vec<f64>, f64), CliError> {
     let (time, desired) = (columns.values[0].clone(), columns.values[1].clone());
     data::check_time_increasing(&time)
         .map_err(|e| CliError::from(e).context(args.desired.display()))?;
-    if time.len() < 2 {
+    let Some(step) = data::mean_time_step(&time) else {
         return Err(CliError::input(format!(
             "{}: a trial needs at least 2 samples",
             args.desired.display()
         )));
-    }
-    let step = (time[time.len() - 1] - time[0]) / (time.len() - 1) as f64;
+    };
     if let Some(k) = time
         .windows(2)
         .position(|w| ((w[1] - w[0]) - step).abs() > 1e-3 * step)
@@ -256,7 +255,8 @@ fn read_aligned(
             time.len()
         )));
     }
-    let step = (time[time.len() - 1] - time[0]) / (time.len() - 1) as f64;
+    // The desired axis has at least two samples (`read_desired`); without, times must match.
+    let step = data::mean_time_step(time).unwrap_or(0.0);
     if let Some(k) = t
         .iter()
         .zip(time)

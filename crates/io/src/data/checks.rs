@@ -36,6 +36,16 @@ pub fn check_time_increasing(time: &[f64]) -> Result<(), DataError> {
     Ok(())
 }
 
+/// The mean time step of a time column, `(t_last - t_first) / (samples - 1)` (in the column's
+/// unit), or `None` for fewer than two samples. Callers that need a usable rate check the
+/// step's sign themselves (a column that passed [`check_time_increasing`] has a positive one).
+pub fn mean_time_step(time: &[f64]) -> Option<f64> {
+    match time {
+        [first, .., last] => Some((last - first) / (time.len() - 1) as f64),
+        _ => None,
+    }
+}
+
 /// Refuses a column whose samples are all equal (e.g. an input that was never driven or a
 /// sensor that was not connected) with [`DataError::Constant`], and a column of fewer than
 /// two samples with [`DataError::TooFewSamples`].

@@ -80,6 +80,7 @@ mod write;
 
 pub use checks::{
     check_finite, check_min_samples, check_not_constant, check_same_length, check_time_increasing,
+    mean_time_step,
 };
 pub use error::DataError;
 pub use level5::{MAX_MAT_BYTES, MAX_MAT_VALUES};
