@@ -37,13 +37,14 @@ pub enum LimitsArg {
 fn set_error(e: ModelSetError) -> PyErr {
     match e {
         ModelSetError::File {
+            path,
             channel,
             name,
             error,
         } => {
             let inner = errors::model_file(error);
             Python::attach(|py| {
-                let message = format!("channel {channel} ({name}): {}", inner.value(py));
+                let message = format!("{path}: channel {channel} ({name}): {}", inner.value(py));
                 let class = inner.get_type(py);
                 PyErr::from_type(class, message)
             })

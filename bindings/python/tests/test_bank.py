@@ -113,3 +113,15 @@ def test_bad_input_is_refused_with_the_reason():
         hystcomp.CompensatorBank(SET_FILE, "ihc", [(0.0, 10.0), (0.0, 10.0)])
     with pytest.raises(OSError):
         hystcomp.CompensatorBank(MODELS / "no-such-set.json")
+
+
+def test_a_refused_channel_model_names_the_set_file(tmp_path):
+    import json
+
+    data = json.loads(SET_FILE.read_text())
+    data["channels"][1]["model"]["thresholds"][3] = 0.05  # unsorted thresholds
+    bad = tmp_path / "bad-set.json"
+    bad.write_text(json.dumps(data))
+    with pytest.raises(hystcomp.HystcompError) as refused:
+        hystcomp.CompensatorBank(bad, "ihc")
+    assert str(refused.value).startswith(f"{bad}: channel 1 (y): "), str(refused.value)

@@ -101,6 +101,9 @@ pub enum ModelSetError {
     },
     /// One channel's model file is refused.
     File {
+        /// The set holding it: the model-set file, the directory, or the single model file
+        /// (`"model set"` for [`ModelSet::from_json`]'s text).
+        path: String,
         /// The channel's index (0-based).
         channel: usize,
         /// Its name.
@@ -128,10 +131,11 @@ impl fmt::Display for ModelSetError {
         match self {
             ModelSetError::Set { path, message } => write!(f, "{path}: {message}"),
             ModelSetError::File {
+                path,
                 channel,
                 name,
                 error,
-            } => write!(f, "channel {channel} ({name}): {error}"),
+            } => write!(f, "{path}: channel {channel} ({name}): {error}"),
             ModelSetError::Channel {
                 channel,
                 name,
@@ -226,6 +230,7 @@ impl ModelSet {
                 )));
             }
             let model = ModelFile::load(path).map_err(|error| ModelSetError::File {
+                path: shown.clone(),
                 channel: 0,
                 name: stem(path),
                 error,
@@ -343,6 +348,7 @@ impl ModelSet {
                 )));
             }
             let model = ModelFile::from_json(model.get()).map_err(|error| ModelSetError::File {
+                path: "model set".into(),
                 channel: k,
                 name: name.clone(),
                 error,
@@ -385,6 +391,7 @@ impl ModelSet {
         for (k, file) in files.iter().enumerate() {
             let name = stem(file);
             let model = ModelFile::load(file).map_err(|error| ModelSetError::File {
+                path: shown.clone(),
                 channel: k,
                 name: name.clone(),
                 error,
@@ -447,12 +454,23 @@ fn stem(path: &Path) -> String {
         .unwrap_or_else(|| "channel_0".into())
 }
 
-/// The set-level error with the file's path.
+/// A set-level or channel-file error with the set's path.
 fn with_path(e: ModelSetError, path: &str) -> ModelSetError {
     match e {
         ModelSetError::Set { message, .. } => ModelSetError::Set {
             path: path.to_string(),
             message,
+        },
+        ModelSetError::File {
+            channel,
+            name,
+            error,
+            ..
+        } => ModelSetError::File {
+            path: path.to_string(),
+            channel,
+            name,
+            error,
         },
         other => other,
     }

@@ -162,7 +162,48 @@ fn bad_sets_are_refused_naming_the_channel() {
     // A channel whose thresholds are unsorted: named by index and name.
     value["channels"][1]["model"]["thresholds"][3] = serde_json::json!(0.05);
     let message = set_error(&value.to_string());
-    assert!(message.starts_with("channel 1 (y): "), "{message}");
+    assert!(
+        message.starts_with("model set: channel 1 (y): "),
+        "{message}"
+    );
+    // Read from a file, from a directory of model files or as one model file: the error names
+    // the set's path, then the channel.
+    let dir = tempfile::tempdir().unwrap();
+    let file = dir.path().join("bad-set.json");
+    std::fs::write(&file, value.to_string()).unwrap();
+    let err = ModelSet::load(&file).unwrap_err();
+    assert!(
+        matches!(&err, ModelSetError::File { channel: 1, name, path, .. }
+            if name == "y" && *path == file.display().to_string()),
+        "{err:?}"
+    );
+    assert!(
+        err.to_string()
+            .starts_with(&format!("{}: channel 1 (y): ", file.display())),
+        "{err}"
+    );
+    let channels = dir.path().join("channels");
+    std::fs::create_dir(&channels).unwrap();
+    for (k, name) in ["a", "b"].iter().enumerate() {
+        std::fs::write(
+            channels.join(format!("{name}.json")),
+            value["channels"][k]["model"].to_string(),
+        )
+        .unwrap();
+    }
+    let err = ModelSet::load(&channels).unwrap_err();
+    assert!(
+        err.to_string()
+            .starts_with(&format!("{}: channel 1 (b): ", channels.display())),
+        "{err}"
+    );
+    let single = channels.join("b.json");
+    let err = ModelSet::load(&single).unwrap_err();
+    assert!(
+        err.to_string()
+            .starts_with(&format!("{}: channel 0 (b): ", single.display())),
+        "{err}"
+    );
     // Another format, version, field; no channel; a name twice.
     assert!(
         set_error(r#"{"format": "x", "format_version": 1, "channels": []}"#).contains("format")
