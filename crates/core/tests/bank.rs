@@ -137,6 +137,14 @@ fn assert_twins<T: Real, K: CompensatorBank<T>, C: Compensator<T>>(
 }
 
 /// Per-sample rows of every channel's desired position, in `T`.
+/// Each of `channels` channels' limits from the bank's `limits`: one pair shared by all, or one
+/// per channel (as the banks read them).
+fn each_limit<T: Copy>(limits: &[T], channels: usize) -> Vec<T> {
+    (0..channels)
+        .map(|c| limits[if limits.len() == 1 { 0 } else { c }])
+        .collect()
+}
+
 fn rows<T: Real>(per_channel: &[Vec<f64>]) -> Vec<Vec<T>> {
     let len = per_channel.first().map_or(0, Vec::len);
     (0..len)
@@ -160,10 +168,11 @@ fn check_plant_banks<T: Real, const W: usize>(
         .map(|&(a, b)| OutputLimits::new(T::from_f64(a), T::from_f64(b)).unwrap())
         .collect();
     let desired = rows::<T>(desired);
+    let each = each_limit(&limits, plants.len());
     // IHC.
     let singles: Vec<Result<Ihc<T, Vec<T>>, CoreError>> = plants
         .iter()
-        .zip(&limits)
+        .zip(&each)
         .map(|(p, l)| Ihc::new(p, *l, mode))
         .collect();
     let bank = IhcBank::<T, Heap, W>::new(&plants, &limits, mode);
@@ -186,7 +195,7 @@ fn check_plant_banks<T: Real, const W: usize>(
     // WIHC.
     let singles: Vec<Result<Wihc<T, Vec<T>>, CoreError>> = plants
         .iter()
-        .zip(&limits)
+        .zip(&each)
         .map(|(p, l)| Wihc::new(p, *l, mode))
         .collect();
     let bank = WihcBank::<T, Heap, W>::new(&plants, &limits, mode);
@@ -212,21 +221,18 @@ fn check_plant_banks<T: Real, const W: usize>(
 /// Models, limits and per-channel trajectories of a random bank.
 type RandomBank = (Vec<VecMpim>, Vec<(f64, f64)>, Vec<Vec<f64>>);
 
-/// A random bank: models, limits and trajectories.
+/// A random bank: models, limits and trajectories. The limits are one pair per channel, all
+/// different or all the same, or one pair shared by every channel (a third each).
 fn random_bank(seed: u64, channels: usize, len: usize) -> RandomBank {
     let mut rng = rng(seed);
     let models = random_models(&mut rng, channels);
-    let shared = rng.random::<bool>();
+    let sharing = rng.random_range(0..3u8);
     let first = random_limits(&mut rng);
-    let limits: Vec<(f64, f64)> = (0..channels)
-        .map(|_| {
-            if shared {
-                first
-            } else {
-                random_limits(&mut rng)
-            }
-        })
-        .collect();
+    let limits: Vec<(f64, f64)> = match sharing {
+        0 => vec![first],
+        1 => vec![first; channels],
+        _ => (0..channels).map(|_| random_limits(&mut rng)).collect(),
+    };
     let desired = models
         .iter()
         .map(|m| random_desired(&mut rng, m, len))
@@ -343,7 +349,7 @@ fn check_dihc_bank<T: Real, const W: usize>(
     let singles: Vec<Result<Dihc<T, Vec<T>>, CoreError>> = inverses
         .iter()
         .zip(&ranges)
-        .zip(&limits)
+        .zip(&each_limit(&limits, inverses.len()))
         .map(|((m, r), l)| Dihc::new(m, r.0, r.1, *l))
         .collect();
     let bank = DihcBank::<T, Heap, W>::new(&inverses, &ranges, &limits);
@@ -503,6 +509,49 @@ fn fixed_storage_holds_a_six_axis_stage() {
         Six::new(&seven, &limits, SolveMode::Exact),
         Err(BankError::Bank(CoreError::Capacity { .. }))
     ));
+}
+
+/// Fixed storage for WIHC too: a six-axis f32 bank of random invertible models of ten
+/// operators, exact and guarded delayed, equals each channel's own [`Wihc`] in fixed-size
+/// buffers bit for bit, diagnostics included.
+#[test]
+fn fixed_storage_wihc_equals_its_single_channels() {
+    const ROWS: [usize; 3] = plant_bank_rows(6, 10, PLAIN_DEGREE, 2);
+    type Six = WihcBank<f32, Fixed<{ ROWS[0] }, { ROWS[1] }, { ROWS[2] }>, 2>;
+    let mut rng = rng(1604);
+    let cast = |v: &[f64]| v.iter().map(|&x| x as f32).collect::<Vec<f32>>();
+    let mut plants: Vec<Mpim<f32, [f32; 10]>> = Vec::new();
+    while plants.len() < 6 {
+        let m = random_invertible_model(&mut rng, 10);
+        let (a1, a2) = (
+            m.input_polynomial().coefficients()[2],
+            m.input_polynomial().coefficients()[0],
+        );
+        if let Ok(p) = Mpim::new(
+            &cast(m.thresholds()),
+            &cast(m.weights()),
+            a1 as f32,
+            a2 as f32,
+        ) {
+            plants.push(p);
+        }
+    }
+    let limits = [OutputLimits::new(0.0f32, 1.0).unwrap()];
+    for mode in [SolveMode::Exact, SolveMode::DelayedGuarded] {
+        let mut bank = Six::new(&plants, &limits, mode).unwrap();
+        let mut singles: Vec<Wihc<f32, [f32; 10]>> = plants
+            .iter()
+            .map(|p| Wihc::new(p, limits[0], mode).unwrap())
+            .collect();
+        let desired: Vec<Vec<f32>> = (0..600)
+            .map(|k| {
+                (0..6)
+                    .map(|c| 0.45 + 0.5 * ((k + 37 * c) as f32 * 0.031).sin())
+                    .collect()
+            })
+            .collect();
+        assert_twins(&mut bank, &mut singles, &desired, "fixed WIHC").unwrap();
+    }
 }
 
 /// The safety invariants, per channel, stated directly (they follow from the equality with the
