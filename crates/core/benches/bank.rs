@@ -17,9 +17,7 @@ use hystcomp_core::{
 };
 use std::hint::black_box;
 
-#[path = "common/bank_workload.rs"]
-mod bank_workload;
-use bank_workload::{channel_models, signal};
+use hystcomp_core::paper::bank_workload::{channel_models, signal};
 
 /// Ticks per measured iteration.
 const TICKS: usize = 200;
@@ -45,8 +43,8 @@ fn bench_type<T: Real>(c: &mut Criterion, type_name: &str) {
         group.throughput(Throughput::Elements((TICKS * channels) as u64));
         // Few samples for the large banks: each iteration is already 800 000 channel-steps.
         group.sample_size(if channels >= 1_024 { 20 } else { 50 });
-        let (plants, inverses) = channel_models::<T>(channels);
-        let desired = signal(&plants, TICKS);
+        let (plants, inverses) = channel_models::<T>(channels).expect("the paper's tables");
+        let desired = signal(&plants, TICKS).expect("a bounded workload");
         let mut control = vec![T::zero(); desired.len()];
         let mut banks: Vec<(&str, Box<dyn CompensatorBank<T>>)> = vec![
             (

@@ -20,9 +20,7 @@
 
 use std::hint::black_box;
 
-#[path = "common/bank_workload.rs"]
-mod bank_workload;
-use bank_workload::{channel_models, signal};
+use hystcomp_core::paper::bank_workload::{channel_models, signal};
 
 use hystcomp_core::{
     CompensatorBank, DihcBank, Heap, IhcBank, OutputLimits, Real, SolveMode, VectorPath, WihcBank,
@@ -60,8 +58,8 @@ fn now_ns(start: std::time::Instant) -> f64 {
 }
 
 fn probe<T: Real>(kind: &str, path: VectorPath, channels: usize, ticks: usize, repeats: usize) {
-    let (plants, inverses) = channel_models::<T>(channels);
-    let desired = signal(&plants, ticks);
+    let (plants, inverses) = channel_models::<T>(channels).expect("the paper's tables");
+    let desired = signal(&plants, ticks).expect("a bounded workload");
     let mut control = vec![T::zero(); desired.len()];
     let limits = [OutputLimits::new(T::zero(), T::one()).expect("0 < 1")];
     let mode = |m: &str| match m {

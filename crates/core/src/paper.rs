@@ -3,6 +3,9 @@
 
 use crate::{Buffer, CoreError, Mpim, Real};
 
+#[cfg(feature = "std")]
+pub mod bank_workload;
+
 /// The parameters of one published MPIM (eq. (4)).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct PublishedMpim {

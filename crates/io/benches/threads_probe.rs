@@ -19,9 +19,7 @@ use std::hint::black_box;
 use std::ops::Range;
 use std::time::Instant;
 
-#[path = "../../core/benches/common/bank_workload.rs"]
-mod bank_workload;
-use bank_workload::{channel_models, signal};
+use hystcomp_core::paper::bank_workload::{channel_models, signal};
 
 use hystcomp_core::{CompensatorBank, DihcBank, Heap, IhcBank, OutputLimits, Real, SolveMode};
 use hystcomp_io::threads::ThreadedBank;
@@ -126,8 +124,8 @@ fn probe<T: Real>(
     repeats: usize,
     parts: usize,
 ) -> Result<(), String> {
-    let (plants, inverses) = channel_models::<T>(channels);
-    let desired = signal(&plants, ticks);
+    let (plants, inverses) = channel_models::<T>(channels).expect("the paper's tables");
+    let desired = signal(&plants, ticks).expect("a bounded workload");
     let limits = [OutputLimits::new(T::zero(), T::one()).expect("0 < 1")];
     let label = format!(
         "{kind} {} {channels} ch, {ticks} ticks",

@@ -12,10 +12,8 @@
 use std::hint::black_box;
 
 use hystcomp_core::{
-    CompensatorBank, DihcBank, Heap, IhcBank, Mpim, OutputLimits, Real, SolveMode, VectorPath,
-    WihcBank,
-    paper::{self, PublishedMpim},
-    with_vector_path,
+    CompensatorBank, DihcBank, Heap, IhcBank, OutputLimits, Real, SolveMode, VectorPath, WihcBank,
+    paper::bank_workload, with_vector_path,
 };
 use serde::Serialize;
 
@@ -27,7 +25,7 @@ use crate::{CliError, Context};
 pub const MAX_BENCH_CHANNELS: usize = hystcomp_io::bank::MAX_CHANNELS;
 
 /// Operators of every channel.
-const OPERATORS: usize = 10;
+const OPERATORS: usize = bank_workload::OPERATORS;
 
 /// The compilations of the bank kernels `--vector-path` times
 /// ([`hystcomp_core::VectorPath`]).
@@ -120,47 +118,6 @@ struct Report {
     figures: Vec<Figure>,
 }
 
-/// `table` spread over [`OPERATORS`] operators, weights scaled by `1 + 0.1 s` for a channel's
-/// own `s` in [-1, 1]. The core's bank benches time the same channels and signal
-/// (`crates/core/benches/common/bank_workload.rs`, which a bench target cannot share with this
-/// crate's source): change both together.
-fn channel_model<T: Real>(
-    table: &PublishedMpim,
-    channel: usize,
-) -> Result<Mpim<T, Vec<T>>, CliError> {
-    let base: Mpim<T, Vec<T>> = table.spread(OPERATORS)?;
-    let s = ((channel as f64) * 0.618_034).fract() * 2.0 - 1.0;
-    let scale = T::from_f64(1.0 + 0.1 * s);
-    let weights: Vec<T> = base.weights().iter().map(|&b| b * scale).collect();
-    Ok(Mpim::new(
-        base.thresholds(),
-        &weights,
-        base.a1(),
-        base.a2(),
-    )?)
-}
-
-/// `ticks x channels` desired positions: each channel a three-tone voltage at its own phase
-/// (rising smoothly from rest over the first quarter) through its own plant.
-fn signal<T: Real>(plants: &[Mpim<T, Vec<T>>], ticks: usize) -> Vec<T> {
-    let channels = plants.len();
-    let mut out = vec![T::zero(); ticks * channels];
-    for (c, plant) in plants.iter().enumerate() {
-        let mut p = plant.clone();
-        let phase = c as f64 * 0.37;
-        for k in 0..ticks {
-            let t = k as f64 / ticks as f64 * 4.0;
-            let rise = 0.5 - 0.5 * (std::f64::consts::PI * t.min(1.0)).cos();
-            let v = 0.5
-                + 0.14 * (std::f64::consts::PI * t + 2.6 + phase).sin()
-                + 0.14 * (1.6 * std::f64::consts::PI * t + 3.0 + phase).sin()
-                + 0.2 * (2.0 * std::f64::consts::PI * t + 1.5 + phase).sin();
-            out[k * channels + c] = p.step(T::from_f64(rise * v));
-        }
-    }
-    out
-}
-
 /// Times every bank kind for `channels` channels in `T`, on each of `paths`.
 fn bank<T: Real>(
     figures: &mut Vec<Figure>,
@@ -171,13 +128,9 @@ fn bank<T: Real>(
 ) -> Result<(), CliError> {
     // At least 50 ticks, and about `samples` channel-steps per run.
     let ticks = (options.samples / channels).max(50);
-    let plants = (0..channels)
-        .map(|c| channel_model::<T>(&paper::TABLE1, c))
-        .collect::<Result<Vec<_>, _>>()?;
-    let inverses = (0..channels)
-        .map(|c| channel_model::<T>(&paper::TABLE2, c))
-        .collect::<Result<Vec<_>, _>>()?;
-    let desired = signal(&plants, ticks);
+    // The channels and signal of the core's bank benches.
+    let (plants, inverses) = bank_workload::channel_models::<T>(channels)?;
+    let desired = bank_workload::signal(&plants, ticks)?;
     let mut control = vec![T::zero(); desired.len()];
     let limits = [OutputLimits::new(T::zero(), T::one())?];
     let bank_error = |e: hystcomp_core::BankError| CliError::input(e.to_string());
