@@ -2,10 +2,15 @@
 //! module, so that `cargo test --workspace` tests the Python package too.
 //!
 //! 1. Finds or creates the virtual environment `target/python-venv` (`python3 -m venv`, then
-//!    `pip install maturin numpy pytest` from the package index) unless it already has them.
-//! 2. `maturin develop` builds `bindings/python` and installs it into that environment, in the
-//!    outer build's target directory, so that it reuses what `cargo test` compiled (cargo
-//!    holds its lock while it builds, not while the test binaries run).
+//!    `pip install numpy pytest` from the package index) unless it already has them.
+//! 2. Builds the extension module with the workspace's libraries
+//!    (`hystcomp_testkit::workspace_libraries`: the outer `cargo test`'s features, so only the
+//!    `cdylib` itself is new) and installs it as `maturin develop` does: the library as
+//!    `python/hystcomp/_hystcomp.abi3.so` beside the package's Python files, and a `.pth` file
+//!    in the environment naming `bindings/python/python`. (`maturin develop` resolved the
+//!    extension's features alone and rebuilt the workspace's crates under it, two to three
+//!    minutes of CI; `pip install ./bindings/python`, the README's way, builds through maturin
+//!    as before.)
 //! 3. `python -m pytest bindings/python/tests -q -rs`; a failure shows pytest's output, and
 //!    every test pytest skipped is recorded with its reason by `hystcomp_testkit::skip`, so
 //!    that CI lists it (cargo would count this one test as passed).
@@ -21,15 +26,6 @@ fn workspace_root() -> PathBuf {
         .join("../..")
         .canonicalize()
         .expect("the workspace root exists")
-}
-
-/// The target directory of the outer `cargo test` (`CARGO_TARGET_DIR`, or `target/`).
-fn target_dir(root: &Path) -> PathBuf {
-    match std::env::var_os("CARGO_TARGET_DIR").map(PathBuf::from) {
-        Some(dir) if dir.is_absolute() => dir,
-        Some(dir) => root.join(dir),
-        None => root.join("target"),
-    }
 }
 
 fn describe(output: &Output) -> String {
@@ -64,8 +60,8 @@ fn succeeds(program: &Path, args: &[&str]) -> bool {
         .is_ok_and(|o| o.status.success())
 }
 
-/// The environment's interpreter, creating the environment and installing maturin, numpy and
-/// pytest when they are missing.
+/// The environment's interpreter, creating the environment and installing numpy and pytest
+/// when they are missing.
 fn virtual_environment(venv: &Path) -> PathBuf {
     let python = venv.join("bin/python");
     if !python.exists() {
@@ -86,17 +82,46 @@ fn virtual_environment(venv: &Path) -> PathBuf {
             "creating the virtual environment for the Python tests (is python3-venv installed?)",
         );
     }
-    let ready = succeeds(&python, &["-c", "import numpy, pytest"])
-        && succeeds(&venv.join("bin/maturin"), &["--version"]);
-    if !ready {
+    if !succeeds(&python, &["-c", "import numpy, pytest"]) {
         run(
-            Command::new(&python).args([
-                "-m", "pip", "install", "--quiet", "maturin", "numpy", "pytest",
-            ]),
-            "installing maturin, numpy and pytest into target/python-venv (needs the package index)",
+            Command::new(&python).args(["-m", "pip", "install", "--quiet", "numpy", "pytest"]),
+            "installing numpy and pytest into target/python-venv (needs the package index)",
         );
     }
     python
+}
+
+/// Installs the extension module built with the workspace's libraries into `venv` as
+/// `maturin develop` installs it (see the module documentation).
+fn install_extension(root: &Path, python: &Path) {
+    let built = hystcomp_testkit::workspace_libraries().join("lib_hystcomp.so");
+    assert!(built.is_file(), "{} was not built", built.display());
+    let package = root.join("bindings/python/python");
+    let module = package.join("hystcomp/_hystcomp.abi3.so");
+    // Copied beside and renamed over the old one: a reader never sees half a library.
+    let partial = package.join("hystcomp/_hystcomp.abi3.so.partial");
+    std::fs::copy(&built, &partial)
+        .unwrap_or_else(|e| panic!("copying {} to {}: {e}", built.display(), partial.display()));
+    std::fs::rename(&partial, &module).unwrap_or_else(|e| {
+        panic!(
+            "renaming {} to {}: {e}",
+            partial.display(),
+            module.display()
+        )
+    });
+    let output = run(
+        Command::new(python).args([
+            "-c",
+            "import sysconfig; print(sysconfig.get_paths()['purelib'])",
+        ]),
+        "asking the environment's Python for its site-packages",
+    );
+    let site = PathBuf::from(String::from_utf8_lossy(&output.stdout).trim());
+    std::fs::write(
+        site.join("hystcomp.pth"),
+        format!("{}\n", package.display()),
+    )
+    .unwrap_or_else(|e| panic!("writing hystcomp.pth in {}: {e}", site.display()));
 }
 
 #[test]
@@ -105,30 +130,18 @@ fn python_package_passes_pytest() {
     let venv = root.join("target/python-venv");
     let python = virtual_environment(&venv);
 
-    // maturin and the pip it calls are found through the environment's bin directory.
+    // Scripts the tests start find the environment's interpreter first.
     let mut path = OsString::from(venv.join("bin"));
     if let Some(system_path) = std::env::var_os("PATH") {
         path.push(":");
         path.push(system_path);
     }
     let started = std::time::Instant::now();
-    run(
-        Command::new(venv.join("bin/maturin"))
-            .current_dir(&root)
-            .args([
-                "develop",
-                "--quiet",
-                "--manifest-path",
-                "bindings/python/Cargo.toml",
-            ])
-            .env("VIRTUAL_ENV", &venv)
-            .env("PATH", &path)
-            .env("CARGO_TARGET_DIR", target_dir(&root))
-            .env_remove("CARGO_BUILD_TARGET")
-            .env_remove("PYTHONHOME"),
-        "building and installing the Python package (maturin develop)",
+    install_extension(&root, &python);
+    eprintln!(
+        "building and installing the extension: {:.1} s",
+        started.elapsed().as_secs_f64()
     );
-    eprintln!("maturin develop: {:.1} s", started.elapsed().as_secs_f64());
 
     let output = Command::new(&python)
         .current_dir(&root)

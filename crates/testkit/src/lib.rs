@@ -18,8 +18,9 @@
 //! # Other tools
 //! Tests that drive other tools (cargo, gcc, octave) share [`target_dir`], [`cargo`] (a nested
 //! cargo on the same target directory), [`run`] (a command whose failure shows its output),
-//! [`available`] and [`c_static_library`] (the C ABI's static library, built once per test
-//! binary).
+//! [`available`], [`workspace_libraries`] (every library of the workspace, built once per test
+//! binary with the outer build's features) and [`c_static_library`] (the C ABI's static
+//! library among them).
 
 use std::fmt::Display;
 use std::fs::OpenOptions;
@@ -106,23 +107,37 @@ pub fn available(program: &str) -> bool {
         .is_ok_and(|o| o.status.success())
 }
 
-/// The C ABI's static library (`libhystcomp.a` of `bindings/c`, debug profile), built by a
-/// nested `cargo build -p hystcomp-c --lib` once per test binary (usually fresh already:
-/// `cargo test` builds every crate type of the library).
-pub fn c_static_library() -> &'static PathBuf {
-    static LIBRARY: OnceLock<PathBuf> = OnceLock::new();
-    LIBRARY.get_or_init(|| {
+/// The workspace's libraries of every crate type, debug profile, built by one nested
+/// `cargo build --workspace --lib --tests` once per test binary; the directory that holds
+/// them (`target/debug`). Its `--workspace --tests` resolves the features as `cargo test
+/// --workspace` does (every member, dev-dependencies included), so under that command the
+/// nested build reuses what it compiled and builds only the crate types `cargo test` leaves
+/// out (the Python extension's `cdylib`). A nested build of one package (`-p hystcomp-c`)
+/// resolves other features and rebuilt the stack under it: about two minutes on the project's
+/// 2-core machine, once for the C library and once for the Python extension.
+pub fn workspace_libraries() -> &'static PathBuf {
+    static LIBRARIES: OnceLock<PathBuf> = OnceLock::new();
+    LIBRARIES.get_or_init(|| {
         run(
             cargo().current_dir(workspace_root()).args([
                 "build",
                 "--quiet",
-                "-p",
-                "hystcomp-c",
+                "--workspace",
                 "--lib",
+                "--tests",
             ]),
-            "the static library of bindings/c must build",
+            "the workspace's libraries must build",
         );
-        let library = target_dir().join("debug/libhystcomp.a");
+        target_dir().join("debug")
+    })
+}
+
+/// The C ABI's static library (`libhystcomp.a` of `bindings/c`, debug profile), from
+/// [`workspace_libraries`].
+pub fn c_static_library() -> &'static PathBuf {
+    static LIBRARY: OnceLock<PathBuf> = OnceLock::new();
+    LIBRARY.get_or_init(|| {
+        let library = workspace_libraries().join("libhystcomp.a");
         assert!(library.is_file(), "{} was not built", library.display());
         library
     })
