@@ -35,19 +35,12 @@ pub enum LimitsArg {
 
 /// A model set's error as a Python exception.
 fn set_error(e: ModelSetError) -> PyErr {
+    // The set's own message (it names the file holding a refused channel's model once).
+    let message = e.to_string();
     match e {
-        ModelSetError::File {
-            path,
-            channel,
-            name,
-            error,
-        } => {
+        ModelSetError::File { error, .. } => {
             let inner = errors::model_file(error);
-            Python::attach(|py| {
-                let message = format!("{path}: channel {channel} ({name}): {}", inner.value(py));
-                let class = inner.get_type(py);
-                PyErr::from_type(class, message)
-            })
+            Python::attach(|py| PyErr::from_type(inner.get_type(py), message))
         }
         ModelSetError::Channel {
             channel,

@@ -101,8 +101,10 @@ pub enum ModelSetError {
     },
     /// One channel's model file is refused.
     File {
-        /// The set holding it: the model-set file, the directory, or the single model file
-        /// (`"model set"` for [`ModelSet::from_json`]'s text).
+        /// The file holding the channel's model: the model-set file, the channel's own file
+        /// in a directory set, or the single model file (`"model set"` for
+        /// [`ModelSet::from_json`]'s text). The message names it once: before the channel,
+        /// unless `error` already names it.
         path: String,
         /// The channel's index (0-based).
         channel: usize,
@@ -135,7 +137,14 @@ impl fmt::Display for ModelSetError {
                 channel,
                 name,
                 error,
-            } => write!(f, "{path}: channel {channel} ({name}): {error}"),
+            } => {
+                let error = error.to_string();
+                if error.contains(path.as_str()) {
+                    write!(f, "channel {channel} ({name}): {error}")
+                } else {
+                    write!(f, "{path}: channel {channel} ({name}): {error}")
+                }
+            }
             ModelSetError::Channel {
                 channel,
                 name,
@@ -391,7 +400,7 @@ impl ModelSet {
         for (k, file) in files.iter().enumerate() {
             let name = stem(file);
             let model = ModelFile::load(file).map_err(|error| ModelSetError::File {
-                path: shown.clone(),
+                path: file.display().to_string(),
                 channel: k,
                 name: name.clone(),
                 error,
@@ -454,7 +463,7 @@ fn stem(path: &Path) -> String {
         .unwrap_or_else(|| "channel_0".into())
 }
 
-/// A set-level or channel-file error with the set's path.
+/// A set-level error, or a channel's error in the set's own text, with the set file's path.
 fn with_path(e: ModelSetError, path: &str) -> ModelSetError {
     match e {
         ModelSetError::Set { message, .. } => ModelSetError::Set {
@@ -462,11 +471,11 @@ fn with_path(e: ModelSetError, path: &str) -> ModelSetError {
             message,
         },
         ModelSetError::File {
+            path: placeholder,
             channel,
             name,
             error,
-            ..
-        } => ModelSetError::File {
+        } if placeholder == "model set" => ModelSetError::File {
             path: path.to_string(),
             channel,
             name,

@@ -167,7 +167,7 @@ fn bad_sets_are_refused_naming_the_channel() {
         "{message}"
     );
     // Read from a file, from a directory of model files or as one model file: the error names
-    // the set's path, then the channel.
+    // the file holding the channel's model, then the channel.
     let dir = tempfile::tempdir().unwrap();
     let file = dir.path().join("bad-set.json");
     std::fs::write(&file, value.to_string()).unwrap();
@@ -191,19 +191,31 @@ fn bad_sets_are_refused_naming_the_channel() {
         )
         .unwrap();
     }
+    let single = channels.join("b.json");
     let err = ModelSet::load(&channels).unwrap_err();
     assert!(
         err.to_string()
-            .starts_with(&format!("{}: channel 1 (b): ", channels.display())),
+            .starts_with(&format!("{}: channel 1 (b): ", single.display())),
         "{err}"
     );
-    let single = channels.join("b.json");
     let err = ModelSet::load(&single).unwrap_err();
     assert!(
         err.to_string()
             .starts_with(&format!("{}: channel 0 (b): ", single.display())),
         "{err}"
     );
+    // An error that names the file itself (a format_version this build does not read): the
+    // path once, in every form of the set.
+    let mut future = value.clone();
+    future["channels"][1]["model"]["format_version"] = serde_json::json!(9);
+    std::fs::write(&file, future.to_string()).unwrap();
+    std::fs::write(&single, future["channels"][1]["model"].to_string()).unwrap();
+    for (set, path) in [(&file, &file), (&channels, &single), (&single, &single)] {
+        let message = ModelSet::load(set).unwrap_err().to_string();
+        let shown = path.display().to_string();
+        assert_eq!(message.matches(&shown).count(), 1, "{message}");
+        assert!(message.contains("format_version 9"), "{message}");
+    }
     // Another format, version, field; no channel; a name twice.
     assert!(
         set_error(r#"{"format": "x", "format_version": 1, "channels": []}"#).contains("format")
