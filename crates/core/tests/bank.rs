@@ -136,7 +136,6 @@ fn assert_twins<T: Real, K: CompensatorBank<T>, C: Compensator<T>>(
     Ok(())
 }
 
-/// Per-sample rows of every channel's desired position, in `T`.
 /// Each of `channels` channels' limits from the bank's `limits`: one pair shared by all, or one
 /// per channel (as the banks read them).
 fn each_limit<T: Copy>(limits: &[T], channels: usize) -> Vec<T> {
@@ -145,6 +144,7 @@ fn each_limit<T: Copy>(limits: &[T], channels: usize) -> Vec<T> {
         .collect()
 }
 
+/// Per-sample rows of every channel's desired position, in `T`.
 fn rows<T: Real>(per_channel: &[Vec<f64>]) -> Vec<Vec<T>> {
     let len = per_channel.first().map_or(0, Vec::len);
     (0..len)

@@ -45,15 +45,16 @@ pub fn channel_models<T: Real>(channels: usize) -> Result<(Models<T>, Models<T>)
 /// `0.5 + 0.14 sin(pi t + 2.6 + p) + 0.14 sin(1.6 pi t + 3 + p) + 0.2 sin(2 pi t + 1.5 + p)`
 /// (`t` from 0 to 4 over the ticks, phase `p = 0.37 c`), rising smoothly from rest over the
 /// first quarter, run through the channel's own plant. Refuses more than
-/// [`MAX_BANK_VALUES`] values with [`CoreError::Capacity`].
+/// [`MAX_BANK_VALUES`] values with [`CoreError::TooLarge`].
 pub fn signal<T: Real>(plants: &[Mpim<T, Vec<T>>], ticks: usize) -> Result<Vec<T>, CoreError> {
     let channels = plants.len();
     let values = ticks
         .checked_mul(channels)
         .filter(|&n| n <= MAX_BANK_VALUES)
-        .ok_or(CoreError::Capacity {
-            needed: ticks.saturating_mul(channels),
-            capacity: MAX_BANK_VALUES,
+        .ok_or(CoreError::TooLarge {
+            what: "workload values (ticks x channels)",
+            found: ticks.saturating_mul(channels),
+            max: MAX_BANK_VALUES,
         })?;
     let mut out = std::vec![T::zero(); values];
     for (c, plant) in plants.iter().enumerate() {
@@ -102,7 +103,7 @@ mod tests {
         assert!(desired.iter().all(|y| y.is_finite()));
         assert!(matches!(
             signal(&plants, usize::MAX),
-            Err(CoreError::Capacity { .. })
+            Err(CoreError::TooLarge { .. })
         ));
     }
 }
