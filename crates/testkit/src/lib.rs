@@ -114,12 +114,22 @@ pub fn available(program: &str) -> bool {
 /// nested build reuses what it compiled and builds only the crate types `cargo test` leaves
 /// out (the Python extension's `cdylib`). A nested build of one package (`-p hystcomp-c`)
 /// resolves other features and rebuilt the stack under it: about two minutes on the project's
-/// 2-core machine, once for the C library and once for the Python extension.
+/// 2-core machine, once for the C library and once for the Python extension. Under a narrower
+/// outer command (`cargo test -p hystcomp-python`, `--release`) it builds what the whole
+/// workspace's tests need once, then stays fresh. The outer build's `RUSTFLAGS` are kept (they
+/// do not change artifact names: without them the nested build would rebuild every library in
+/// place, and the next outer build again).
 pub fn workspace_libraries() -> &'static PathBuf {
     static LIBRARIES: OnceLock<PathBuf> = OnceLock::new();
     LIBRARIES.get_or_init(|| {
+        let mut command = cargo();
+        for flags in ["RUSTFLAGS", "CARGO_ENCODED_RUSTFLAGS"] {
+            if let Some(value) = std::env::var_os(flags) {
+                command.env(flags, value);
+            }
+        }
         run(
-            cargo().current_dir(workspace_root()).args([
+            command.current_dir(workspace_root()).args([
                 "build",
                 "--quiet",
                 "--workspace",
