@@ -312,6 +312,9 @@ fn makefile_builds_and_runs_both_examples() {
         Command::new("make")
             .args(["-C", "examples/c", "run", "PROFILE=debug"])
             .arg(format!("OUT={}", out.display()))
+            // The build `workspace_libraries` made (the default `-p hystcomp-c` resolves other
+            // features and rebuilt the crates under it, two minutes in CI).
+            .arg("CARGO_PACKAGES=--workspace --lib --tests")
             .env("CARGO_TARGET_DIR", target_dir())
             .current_dir(workspace_root()),
         "make -C examples/c run must build and run both examples",
