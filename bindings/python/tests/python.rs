@@ -204,3 +204,27 @@ fn pytest_skips_are_read_from_its_summary() {
     );
     assert!(skipped_tests("40 passed in 2.1s\n").is_empty());
 }
+
+/// What `python_package_passes_pytest` installs by hand is what `pip install ./bindings/python`
+/// (maturin) builds: `pyproject.toml`'s module name is the crate's `cdylib` and `#[pymodule]`,
+/// in the package under `python/` (the `.pth` file's directory).
+#[test]
+fn pyproject_names_the_module_the_test_installs() {
+    let here = workspace_root().join("bindings/python");
+    let read = |file: &str| {
+        std::fs::read_to_string(here.join(file)).unwrap_or_else(|e| panic!("{file}: {e}"))
+    };
+    let pyproject = read("pyproject.toml");
+    assert!(
+        pyproject.contains("module-name = \"hystcomp._hystcomp\"")
+            && pyproject.contains("python-source = \"python\""),
+        "{pyproject}"
+    );
+    let manifest = read("Cargo.toml");
+    assert!(
+        manifest.contains("name = \"_hystcomp\"") && manifest.contains("crate-type = [\"cdylib\"]"),
+        "{manifest}"
+    );
+    assert!(read("src/lib.rs").contains("#[pymodule]\nfn _hystcomp("));
+    assert!(here.join("python/hystcomp/__init__.py").is_file());
+}
