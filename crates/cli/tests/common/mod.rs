@@ -74,6 +74,34 @@ pub fn dbo_crossval(train: &Path, test: &Path, extra: &[&str]) -> Output {
     hystcomp(&args)
 }
 
+/// `hystcomp --json bench --samples 500 --repeats 1 --model <model>`: the figures timed for
+/// that model file (each with a positive median), after asserting success.
+pub fn bench_model_figures(model: &Path) -> Vec<serde_json::Value> {
+    let out = hystcomp(&[
+        "--json",
+        "bench",
+        "--samples",
+        "500",
+        "--repeats",
+        "1",
+        "--model",
+        s(model),
+    ]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let json: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    let figures: Vec<serde_json::Value> = json["figures"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .filter(|f| f["model"] == s(model))
+        .cloned()
+        .collect();
+    for f in &figures {
+        assert!(f["median_ns_per_sample"].as_f64().unwrap() > 0.0, "{f}");
+    }
+    figures
+}
+
 /// Reads a CSV of numbers written by the binary: the header and the columns.
 pub fn read_csv(path: &Path) -> (Vec<String>, Vec<Vec<f64>>) {
     let text = std::fs::read_to_string(path).unwrap();
