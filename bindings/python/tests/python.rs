@@ -21,12 +21,7 @@ use std::ffi::OsString;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
-fn workspace_root() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("../..")
-        .canonicalize()
-        .expect("the workspace root exists")
-}
+use hystcomp_testkit::{run, workspace_root};
 
 fn describe(output: &Output) -> String {
     format!(
@@ -34,22 +29,6 @@ fn describe(output: &Output) -> String {
         String::from_utf8_lossy(&output.stdout),
         String::from_utf8_lossy(&output.stderr)
     )
-}
-
-/// Runs `command`; its output, or a panic with `what` and the output.
-fn run(command: &mut Command, what: &str) -> Output {
-    let shown = format!("{command:?}");
-    let output = command
-        .output()
-        .unwrap_or_else(|e| panic!("{what}: could not run {shown}: {e}"));
-    if !output.status.success() {
-        panic!(
-            "{what}: {shown} failed ({}):\n{}",
-            output.status,
-            describe(&output)
-        );
-    }
-    output
 }
 
 /// `true` when `program args...` runs and succeeds.
