@@ -203,7 +203,7 @@ impl DihcKernel {
         let x = desired.max(input_min).min(input_max);
         // Mpim::step: g(x) + sum b_i F_{r_i}[x].
         let g = remainder.input_function(x, block.get(rows.coefficient(0)));
-        let fed = update_memory_with(
+        let fed = update_memory_with::<_, _, false, true>(
             block,
             rows.thresholds(),
             rows.weights(),
@@ -212,8 +212,6 @@ impl DihcKernel {
             block.count(InverseRows::OPERATORS),
             x,
             active,
-            false,
-            true,
             self.uniform,
         );
         let v = g + fed.sum;

@@ -296,10 +296,10 @@ pub(crate) struct Fed<T, const W: usize> {
 }
 
 /// Feeds `x` to the operators of the `active` lanes (eqs. (1)-(2), `crate::play::feed_bank`).
-#[allow(clippy::too_many_arguments)]
 /// With `count`, also counts the operators at either edge of their band and sums `b_i w_i` in
 /// four partial sums exactly as `crate::play::four_way_sum` does for each lane's own operator
 /// count (`uniform`: every lane has the bank's `rows.n` operators).
+#[allow(clippy::too_many_arguments)]
 #[inline(always)]
 pub(crate) fn update_memory<T: Real, const W: usize>(
     block: &mut Block<'_, T, W>,
@@ -313,20 +313,27 @@ pub(crate) fn update_memory<T: Real, const W: usize>(
     count: bool,
     uniform: bool,
 ) -> Fed<T, W> {
-    update_memory_with(
-        block, thresholds, weights, memory, n, operators, x, active, count, count, uniform,
-    )
+    if count {
+        update_memory_with::<_, _, true, true>(
+            block, thresholds, weights, memory, n, operators, x, active, uniform,
+        )
+    } else {
+        update_memory_with::<_, _, false, false>(
+            block, thresholds, weights, memory, n, operators, x, active, uniform,
+        )
+    }
 }
 
-/// [`update_memory`], with the counts of operators at either edge (`edges`) and the weighted
-/// sum (`sum`) asked for separately.
+/// [`update_memory`], with the counts of operators at either edge (`EDGES`) and the weighted
+/// sum (`SUM`) asked for separately.
 ///
 /// The operator rows are sliced once and walked four operators at a time, so that the four
-/// partial sums stay in registers; each combination of `edges`, `sum` and `uniform` has its
-/// own loop (no test inside it).
+/// partial sums stay in registers; each combination of `EDGES`, `SUM` and `uniform` has its
+/// own loop (no test inside it). `EDGES` and `SUM` are constants of each call, so that only
+/// the loops a kernel uses are compiled into it (every one is inlined into every vector path).
 #[allow(clippy::too_many_arguments)]
 #[inline(always)]
-pub(crate) fn update_memory_with<T: Real, const W: usize>(
+pub(crate) fn update_memory_with<T: Real, const W: usize, const EDGES: bool, const SUM: bool>(
     block: &mut Block<'_, T, W>,
     thresholds: usize,
     weights: usize,
@@ -335,8 +342,6 @@ pub(crate) fn update_memory_with<T: Real, const W: usize>(
     operators: U<W>,
     x: L<T, W>,
     active: Mask<T, W>,
-    edges: bool,
-    sum: bool,
     uniform: bool,
 ) -> Fed<T, W> {
     let Some(rows) = OperatorRows::of(block, thresholds, weights, memory, n) else {
@@ -347,14 +352,11 @@ pub(crate) fn update_memory_with<T: Real, const W: usize>(
             sum: Lanes::zero(),
         };
     };
-    match (edges, sum, uniform) {
-        (false, false, _) => rows.update::<false, false, true>(operators, x, active),
-        (true, false, true) => rows.update::<true, false, true>(operators, x, active),
-        (true, false, false) => rows.update::<true, false, false>(operators, x, active),
-        (false, true, true) => rows.update::<false, true, true>(operators, x, active),
-        (false, true, false) => rows.update::<false, true, false>(operators, x, active),
-        (true, true, true) => rows.update::<true, true, true>(operators, x, active),
-        (true, true, false) => rows.update::<true, true, false>(operators, x, active),
+    // Without counts or sum, the operators beyond a lane's own count change nothing it reads.
+    if uniform || !(EDGES || SUM) {
+        rows.update::<EDGES, SUM, true>(operators, x, active)
+    } else {
+        rows.update::<EDGES, SUM, false>(operators, x, active)
     }
 }
 

@@ -128,39 +128,53 @@ fn run_blocks<'a, T: Real, K: BlockKernel<T, W>, const W: usize>(
     }
 }
 
-/// [`run_blocks`] compiled with AVX2.
-///
-/// # Safety
-/// The processor must support AVX2.
+/// The AVX2 compilation, in a module of its own: the compiler gives each module's
+/// instantiations their own code-generation unit, so that the three compilations of a kernel
+/// (each the whole kernel inlined) are optimised in parallel rather than one after another.
 #[cfg(all(feature = "std", target_arch = "x86_64"))]
-#[target_feature(enable = "avx2")]
-unsafe fn run_blocks_avx2<'a, T: Real, K: BlockKernel<T, W>, const W: usize>(
-    kernel: &K,
-    blocks: impl Iterator<Item = Block<'a, T, W>>,
-    desired: &[T],
-    control: &mut [T],
-) {
-    run_blocks(kernel, blocks, desired, control, true)
+mod avx2 {
+    use super::{Block, BlockKernel, Real, run_blocks};
+
+    /// [`run_blocks`] compiled with AVX2.
+    ///
+    /// # Safety
+    /// The processor must support AVX2.
+    #[target_feature(enable = "avx2")]
+    pub(super) unsafe fn run_blocks_avx2<'a, T: Real, K: BlockKernel<T, W>, const W: usize>(
+        kernel: &K,
+        blocks: impl Iterator<Item = Block<'a, T, W>>,
+        desired: &[T],
+        control: &mut [T],
+    ) {
+        run_blocks(kernel, blocks, desired, control, true)
+    }
 }
 
-/// [`run_blocks`] compiled with AVX-512 (foundation, with 256-bit forms, byte/word and
-/// double/quad-word instructions).
-///
-/// # Safety
-/// The processor must support AVX-512 F, VL, BW and DQ.
+/// The AVX-512 compilation, in a module of its own (see [`avx2`]).
 #[cfg(all(feature = "std", target_arch = "x86_64"))]
-#[target_feature(enable = "avx512f,avx512vl,avx512bw,avx512dq")]
-unsafe fn run_blocks_avx512<'a, T: Real, K: BlockKernel<T, W>, const W: usize>(
-    kernel: &K,
-    blocks: impl Iterator<Item = Block<'a, T, W>>,
-    desired: &[T],
-    control: &mut [T],
-) {
-    run_blocks(kernel, blocks, desired, control, true)
+mod avx512 {
+    use super::{Block, BlockKernel, Real, run_blocks};
+
+    /// [`run_blocks`] compiled with AVX-512 (foundation, with 256-bit forms, byte/word and
+    /// double/quad-word instructions).
+    ///
+    /// # Safety
+    /// The processor must support AVX-512 F, VL, BW and DQ.
+    #[target_feature(enable = "avx512f,avx512vl,avx512bw,avx512dq")]
+    pub(super) unsafe fn run_blocks_avx512<'a, T: Real, K: BlockKernel<T, W>, const W: usize>(
+        kernel: &K,
+        blocks: impl Iterator<Item = Block<'a, T, W>>,
+        desired: &[T],
+        control: &mut [T],
+    ) {
+        run_blocks(kernel, blocks, desired, control, true)
+    }
 }
 
 /// Steps every block with the compilation of the kernel [`VectorPath::current`] names.
-#[inline]
+///
+/// Not `#[inline]`: one copy per bank type in the crate that uses it, not one in each of its
+/// codegen units (every copy holds the whole kernel three times over, one per vector path).
 pub(crate) fn run<'a, T: Real, K: BlockKernel<T, W>, const W: usize>(
     kernel: &K,
     blocks: impl Iterator<Item = Block<'a, T, W>>,
@@ -171,12 +185,12 @@ pub(crate) fn run<'a, T: Real, K: BlockKernel<T, W>, const W: usize>(
     match VectorPath::current() {
         VectorPath::Avx512 => {
             // SAFETY: `current` names a path only if the processor supports it.
-            unsafe { run_blocks_avx512(kernel, blocks, desired, control) };
+            unsafe { avx512::run_blocks_avx512(kernel, blocks, desired, control) };
             return;
         }
         VectorPath::Avx2 => {
             // SAFETY: as above.
-            unsafe { run_blocks_avx2(kernel, blocks, desired, control) };
+            unsafe { avx2::run_blocks_avx2(kernel, blocks, desired, control) };
             return;
         }
         VectorPath::Best | VectorPath::Baseline => {}

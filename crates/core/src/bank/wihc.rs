@@ -220,52 +220,50 @@ impl PlantKernel<WihcMethod> {
         let active = guard.accept(desired);
         let v_prev = state.input;
         let equation = Eq9 { remainder, desired };
-        let out = if self.mode == SolveMode::Exact {
-            let f_prev = remainder.value(v_prev) + state.output() - desired;
-            let s = solve(
-                block, rows, &state, &equation, f_prev, guard.min, guard.max, active,
-            );
-            let v = guard.emit(s.input, s.saturated, active);
-            // The solved segment's state when the output is the solution; a full feed of the
-            // clamped output otherwise.
-            let clamped = v.compare(s.input, |a, b| a != b);
-            let fed = LaneSolution { input: v, ..s };
-            feed_solved_or_full(block, rows, &mut state, &fed, active, clamped, self.uniform);
-            v
-        } else if self.mode == SolveMode::DelayedGuarded {
-            // `crate::wihc::wihc_step`: beyond reach, the exact solution's limit at once,
-            // counted; otherwise the plant's PI part brought to P1(t - Ts) + mu e(t).
-            let h_prev = remainder.value(v_prev);
-            let p1_prev = state.output();
-            let f_prev = h_prev + p1_prev - desired;
-            let reach = solve(
-                block,
-                rows,
-                &state,
-                &ReachOnly(&equation),
-                f_prev,
-                guard.min,
-                guard.max,
-                active,
-            );
-            let beyond = reach.saturated & active;
-            let relaxation = block.get(rows.scalar(PlantRows::RELAXATION));
-            let relaxed = relaxation.lt(Lanes::splat(T::one()));
-            let target = (p1_prev - relaxation * f_prev).or_keep(relaxed, desired - h_prev);
-            let stepping = active.and_not(beyond);
-            let step = solve(
-                block,
-                rows,
-                &state,
-                &BankOutput { target },
-                p1_prev - target,
-                guard.min,
-                guard.max,
-                stepping,
-            );
-            let s = reach.select(beyond, step);
-            let (out, clamped) = guard.clamp(s.input, s.saturated | beyond);
-            let v = guard.record(out, clamped, !beyond, active);
+        let out = if matches!(self.mode, SolveMode::Exact | SolveMode::DelayedGuarded) {
+            // Each mode solves for the sample; one memory update follows (one copy of it in
+            // the compiled kernel for both).
+            let (s, v) = if self.mode == SolveMode::Exact {
+                let f_prev = remainder.value(v_prev) + state.output() - desired;
+                let s = solve(
+                    block, rows, &state, &equation, f_prev, guard.min, guard.max, active,
+                );
+                (s, guard.emit(s.input, s.saturated, active))
+            } else {
+                // `crate::wihc::wihc_step`: beyond reach, the exact solution's limit at once,
+                // counted; otherwise the plant's PI part brought to P1(t - Ts) + mu e(t).
+                let h_prev = remainder.value(v_prev);
+                let p1_prev = state.output();
+                let f_prev = h_prev + p1_prev - desired;
+                let reach = solve(
+                    block,
+                    rows,
+                    &state,
+                    &ReachOnly(&equation),
+                    f_prev,
+                    guard.min,
+                    guard.max,
+                    active,
+                );
+                let beyond = reach.saturated & active;
+                let relaxation = block.get(rows.scalar(PlantRows::RELAXATION));
+                let relaxed = relaxation.lt(Lanes::splat(T::one()));
+                let target = (p1_prev - relaxation * f_prev).or_keep(relaxed, desired - h_prev);
+                let stepping = active.and_not(beyond);
+                let step = solve(
+                    block,
+                    rows,
+                    &state,
+                    &BankOutput { target },
+                    p1_prev - target,
+                    guard.min,
+                    guard.max,
+                    stepping,
+                );
+                let s = reach.select(beyond, step);
+                let (out, clamped) = guard.clamp(s.input, s.saturated | beyond);
+                (s, guard.record(out, clamped, !beyond, active))
+            };
             // The solved segment's state when the output is the solution; a full feed of the
             // clamped output otherwise.
             let changed = v.compare(s.input, |a, b| a != b);
@@ -294,7 +292,7 @@ impl PlantKernel<WihcMethod> {
             let v = guard.record(out, clamped, reachable, active);
             // The memory and its weighted sum only: the counts of operators at the edges,
             // which only the walk above reads, are recomputed before it runs.
-            let fed = update_memory_with(
+            let fed = update_memory_with::<_, _, false, true>(
                 block,
                 rows.thresholds(),
                 rows.weights(),
@@ -303,8 +301,6 @@ impl PlantKernel<WihcMethod> {
                 state.operators,
                 v,
                 active,
-                false,
-                true,
                 self.uniform,
             );
             state.input = v.or_keep(active, state.input);
