@@ -3,7 +3,8 @@
 use super::guard::GuardLanes;
 use super::lanes::{Lanes, Mask};
 use super::plant::{
-    PlantKernel, all_odd_cubic, cubic_lanes, plant_bank, polynomial_lanes, write_lane,
+    PlantKernel, all_odd_cubic, cubic_lanes, guarded_target, plant_bank, polynomial_lanes,
+    write_lane,
 };
 use super::play::{LaneEquation, PlayState, ReachOnly, feed, feed_solved, solve};
 use super::root::{LaneRemainder, increasing_root};
@@ -268,9 +269,7 @@ impl PlantKernel<IhcMethod> {
             );
             let beyond = reach.saturated & active;
             // w(t - Ts) + mu (y_d - w(t - Ts) - h(v(t - Ts))); with mu = 1, y_d - h(v(t - Ts)).
-            let relaxation = block.get(rows.scalar(PlantRows::RELAXATION));
-            let relaxed = relaxation.lt(Lanes::splat(T::one()));
-            let w = (w_prev - relaxation * f_exact).or_keep(relaxed, desired - h_prev);
+            let w = guarded_target(block, rows, w_prev, f_exact, desired, h_prev);
             let stepping = active.and_not(beyond);
             let step = solve(
                 block,

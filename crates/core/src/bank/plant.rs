@@ -192,3 +192,21 @@ pub(crate) fn polynomial_lanes<T: Real, const W: usize>(
         odd_cubic: block.count(odd_row).test(|odd| odd != 0),
     }
 }
+
+/// The under-relaxed target of the guarded delayed loops (`crate::ihc::ihc_step`,
+/// `crate::wihc::wihc_step`) in every lane: `previous - mu f_prev`, or with `mu = 1`,
+/// `desired - h_prev` (the single compensators' arithmetic, so the same bits). `previous` is
+/// IHC's `w(t - Ts)` or WIHC's `P1(t - Ts)`, `f_prev = previous + h_prev - desired`.
+#[inline(always)]
+pub(crate) fn guarded_target<T: Real, const W: usize>(
+    block: &Block<'_, T, W>,
+    rows: &PlantRows,
+    previous: Lanes<T, W>,
+    f_prev: Lanes<T, W>,
+    desired: Lanes<T, W>,
+    h_prev: Lanes<T, W>,
+) -> Lanes<T, W> {
+    let relaxation = block.get(rows.scalar(PlantRows::RELAXATION));
+    let relaxed = relaxation.lt(Lanes::splat(T::one()));
+    (previous - relaxation * f_prev).or_keep(relaxed, desired - h_prev)
+}

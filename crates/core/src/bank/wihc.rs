@@ -4,7 +4,8 @@ use super::guard::GuardLanes;
 use super::ihc::rounding_tolerance;
 use super::lanes::{Lanes, Mask};
 use super::plant::{
-    PlantKernel, all_odd_cubic, cubic_lanes, plant_bank, polynomial_lanes, write_lane,
+    PlantKernel, all_odd_cubic, cubic_lanes, guarded_target, plant_bank, polynomial_lanes,
+    write_lane,
 };
 use super::play::{
     LaneEquation, LaneSolution, PlayState, ReachOnly, feed, feed_solved_or_full, recount, solve,
@@ -246,9 +247,7 @@ impl PlantKernel<WihcMethod> {
                     active,
                 );
                 let beyond = reach.saturated & active;
-                let relaxation = block.get(rows.scalar(PlantRows::RELAXATION));
-                let relaxed = relaxation.lt(Lanes::splat(T::one()));
-                let target = (p1_prev - relaxation * f_prev).or_keep(relaxed, desired - h_prev);
+                let target = guarded_target(block, rows, p1_prev, f_prev, desired, h_prev);
                 let stepping = active.and_not(beyond);
                 let step = solve(
                     block,
