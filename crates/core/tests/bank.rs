@@ -189,7 +189,16 @@ fn check_plant_banks<T: Real, const W: usize>(
         }
         None => {
             let mut singles: Vec<_> = singles.into_iter().map(Result::unwrap).collect();
-            assert_twins(&mut bank.unwrap(), &mut singles, &desired, "IHC")?;
+            let mut bank = bank.unwrap();
+            prop_assert_eq!(bank.mode(), mode);
+            for (c, single) in singles.iter().enumerate() {
+                prop_assert_eq!(
+                    bank.guard_relaxation(c).map(|mu| mu.to_f64().to_bits()),
+                    Some(single.guard_relaxation().to_f64().to_bits())
+                );
+            }
+            prop_assert_eq!(bank.guard_relaxation(singles.len()), None);
+            assert_twins(&mut bank, &mut singles, &desired, "IHC")?;
         }
     }
     // WIHC.
@@ -212,7 +221,16 @@ fn check_plant_banks<T: Real, const W: usize>(
         }
         None => {
             let mut singles: Vec<_> = singles.into_iter().map(Result::unwrap).collect();
-            assert_twins(&mut bank.unwrap(), &mut singles, &desired, "WIHC")?;
+            let mut bank = bank.unwrap();
+            prop_assert_eq!(bank.mode(), mode);
+            for (c, single) in singles.iter().enumerate() {
+                prop_assert_eq!(
+                    bank.guard_relaxation(c).map(|mu| mu.to_f64().to_bits()),
+                    Some(single.guard_relaxation().to_f64().to_bits())
+                );
+            }
+            prop_assert_eq!(bank.guard_relaxation(singles.len()), None);
+            assert_twins(&mut bank, &mut singles, &desired, "WIHC")?;
         }
     }
     Ok(())
@@ -366,12 +384,16 @@ fn check_dihc_bank<T: Real, const W: usize>(
         }
         None => {
             let mut singles: Vec<_> = singles.into_iter().map(Result::unwrap).collect();
-            assert_twins(
-                &mut bank.unwrap(),
-                &mut singles,
-                &rows::<T>(desired),
-                "DIHC",
-            )?;
+            let mut bank = bank.unwrap();
+            for (c, single) in singles.iter().enumerate() {
+                let bits = |(lo, hi): (T, T)| (lo.to_f64().to_bits(), hi.to_f64().to_bits());
+                prop_assert_eq!(
+                    bank.input_range(c).map(bits),
+                    Some(bits(single.input_range()))
+                );
+            }
+            prop_assert_eq!(bank.input_range(singles.len()), None);
+            assert_twins(&mut bank, &mut singles, &rows::<T>(desired), "DIHC")?;
         }
     }
     Ok(())

@@ -1,14 +1,15 @@
 //! A bank of DIHC channels (section 3.3, eq. (10)): [`crate::Dihc`] lane by lane.
 
+use super::channels::{Channels, compensator_bank};
 use super::guard::GuardLanes;
 use super::lanes::Lanes;
 use super::plant::{all_odd_cubic, channel_lanes, cubic_lanes, polynomial_lanes, write_counters};
 use super::play::update_memory_with;
 use super::root::LaneRemainder;
-use super::run::{BlockKernel, run};
+use super::run::BlockKernel;
 use super::storage::{BankStorage, Block, Blocks, InverseRows, blocks};
-use super::{BankError, CompensatorBank, LANES, check_bank_size, check_tick, limits_of};
-use crate::{Buffer, CoreError, Diagnostics, Dihc, Mpim, OutputLimits, Real};
+use super::{BankError, LANES, check_bank_size, limits_of};
+use crate::{Buffer, CoreError, Dihc, Mpim, OutputLimits, Real};
 
 type L<T, const W: usize> = Lanes<T, W>;
 
@@ -17,9 +18,7 @@ type L<T, const W: usize> = Lanes<T, W>;
 /// bit (see the [module documentation](super)).
 #[derive(Debug, Clone)]
 pub struct DihcBank<T: Real, S: BankStorage<T, W>, const W: usize = LANES> {
-    blocks: Blocks<T, S, W>,
-    kernel: DihcKernel,
-    channels: usize,
+    channels: Channels<T, S, DihcKernel, W>,
 }
 
 /// What every block of a DIHC bank shares.
@@ -71,30 +70,32 @@ impl<T: Real, S: BankStorage<T, W>, const W: usize> DihcBank<T, S, W> {
                 write_dihc_lane(&mut storage, &rows, lane, &dihc);
             }
         }
+        let kernel = DihcKernel {
+            rows,
+            uniform: inverse_models.iter().all(|p| p.len() == n),
+            cubic: inverse_models
+                .iter()
+                .all(|p| p.input_polynomial().is_odd_cubic()),
+        };
         Ok(DihcBank {
-            blocks: storage,
-            kernel: DihcKernel {
-                rows,
-                uniform: inverse_models.iter().all(|p| p.len() == n),
-                cubic: inverse_models
-                    .iter()
-                    .all(|p| p.input_polynomial().is_odd_cubic()),
+            channels: Channels {
+                blocks: storage,
+                kernel,
+                count: channels,
             },
-            channels,
         })
     }
 
     /// The input range `(min, max)` of desired positions `channel` accepts.
     pub fn input_range(&self, channel: usize) -> Option<(T, T)> {
-        let rows = &self.kernel.rows;
-        (channel < self.channels).then(|| {
-            (
-                self.blocks
-                    .value(channel, rows.scalar(InverseRows::INPUT_MIN)),
-                self.blocks
-                    .value(channel, rows.scalar(InverseRows::INPUT_MAX)),
-            )
-        })
+        let rows = &self.channels.kernel.rows;
+        let min = self
+            .channels
+            .value(channel, rows.scalar(InverseRows::INPUT_MIN))?;
+        let max = self
+            .channels
+            .value(channel, rows.scalar(InverseRows::INPUT_MAX))?;
+        Some((min, max))
     }
 }
 
@@ -143,37 +144,7 @@ fn write_dihc_lane<T: Real, S: BankStorage<T, W>, B: Buffer<T>, const W: usize>(
     write_counters(blocks, lane, &dihc.guard);
 }
 
-impl<T: Real, S: BankStorage<T, W>, const W: usize> CompensatorBank<T> for DihcBank<T, S, W> {
-    fn channels(&self) -> usize {
-        self.channels
-    }
-
-    fn reset(&mut self) {
-        for mut block in self.blocks.blocks_mut() {
-            self.kernel.reset(&mut block);
-        }
-    }
-
-    #[inline]
-    fn step(&mut self, desired: &[T], control: &mut [T]) -> Result<(), CoreError> {
-        check_tick(self.channels, desired.len(), control.len(), "controls")?;
-        run(&self.kernel, self.blocks.blocks_mut(), desired, control);
-        Ok(())
-    }
-
-    fn limits(&self, channel: usize) -> Option<OutputLimits<T>> {
-        super::limits_at(
-            &self.blocks,
-            self.kernel.rows.limits(),
-            channel,
-            self.channels,
-        )
-    }
-
-    fn diagnostics(&self, channel: usize) -> Option<Diagnostics> {
-        super::diagnostics_of(&self.blocks, channel, self.channels)
-    }
-}
+compensator_bank!(DihcBank);
 
 impl DihcKernel {
     fn guard<T: Real, const W: usize>(&self, block: &Block<'_, T, W>) -> GuardLanes<T, W> {
@@ -234,6 +205,14 @@ impl DihcKernel {
 impl<T: Real, const W: usize> BlockKernel<T, W> for DihcKernel {
     const HEAD: usize = InverseRows::HEAD;
     const COUNTS: usize = InverseRows::COUNTS;
+
+    fn reset_block(&self, block: &mut Block<'_, T, W>) {
+        self.reset(block);
+    }
+
+    fn limit_rows(&self) -> (usize, usize) {
+        self.rows.limits()
+    }
 
     #[inline(always)]
     fn step(&self, block: &mut Block<'_, T, W>, desired: L<T, W>) -> L<T, W> {

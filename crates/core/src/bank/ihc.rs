@@ -1,5 +1,6 @@
 //! A bank of IHC channels (section 3.1, eqs. (5)-(8)): [`crate::Ihc`] lane by lane.
 
+use super::channels::{Channels, compensator_bank};
 use super::guard::GuardLanes;
 use super::lanes::{Lanes, Mask};
 use super::plant::{
@@ -8,10 +9,10 @@ use super::plant::{
 };
 use super::play::{LaneEquation, PlayState, ReachOnly, feed, feed_solved, solve};
 use super::root::{LaneRemainder, increasing_root};
-use super::run::{BlockKernel, run};
-use super::storage::{BankStorage, Block, Blocks, PlantRows};
-use super::{BankError, CompensatorBank, LANES, check_tick};
-use crate::{Buffer, CoreError, Diagnostics, Ihc, Mpim, OutputLimits, Real, SolveMode};
+use super::run::BlockKernel;
+use super::storage::{BankStorage, Block, PlantRows};
+use super::{BankError, LANES};
+use crate::{Buffer, Ihc, Mpim, OutputLimits, Real, SolveMode};
 
 type L<T, const W: usize> = Lanes<T, W>;
 
@@ -31,9 +32,7 @@ type L<T, const W: usize> = Lanes<T, W>;
 /// ```
 #[derive(Debug, Clone)]
 pub struct IhcBank<T: Real, S: BankStorage<T, W>, const W: usize = LANES> {
-    blocks: Blocks<T, S, W>,
-    kernel: IhcKernel,
-    channels: usize,
+    channels: Channels<T, S, IhcKernel, W>,
 }
 
 /// Marks the [`PlantKernel`] of an IHC bank.
@@ -51,7 +50,7 @@ impl<T: Real, S: BankStorage<T, W>, const W: usize> IhcBank<T, S, W> {
         limits: &[OutputLimits<T>],
         mode: SolveMode,
     ) -> Result<Self, BankError> {
-        let (blocks, kernel) = plant_bank(
+        let channels = plant_bank(
             plants,
             limits,
             mode,
@@ -68,59 +67,22 @@ impl<T: Real, S: BankStorage<T, W>, const W: usize> IhcBank<T, S, W> {
                 )
             },
         )?;
-        Ok(IhcBank {
-            blocks,
-            kernel,
-            channels: plants.len(),
-        })
+        Ok(IhcBank { channels })
     }
 
     /// The solve mode of every channel.
     pub fn mode(&self) -> SolveMode {
-        self.kernel.mode
+        self.channels.mode()
     }
 
     /// The under-relaxation `mu` of [`SolveMode::DelayedGuarded`] of `channel` (see
     /// [`crate::Ihc::guard_relaxation`]).
     pub fn guard_relaxation(&self, channel: usize) -> Option<T> {
-        (channel < self.channels).then(|| {
-            self.blocks
-                .value(channel, self.kernel.rows.scalar(PlantRows::RELAXATION))
-        })
+        self.channels.relaxation(channel)
     }
 }
 
-impl<T: Real, S: BankStorage<T, W>, const W: usize> CompensatorBank<T> for IhcBank<T, S, W> {
-    fn channels(&self) -> usize {
-        self.channels
-    }
-
-    fn reset(&mut self) {
-        for mut block in self.blocks.blocks_mut() {
-            self.kernel.reset(&mut block);
-        }
-    }
-
-    #[inline]
-    fn step(&mut self, desired: &[T], control: &mut [T]) -> Result<(), CoreError> {
-        check_tick(self.channels, desired.len(), control.len(), "controls")?;
-        run(&self.kernel, self.blocks.blocks_mut(), desired, control);
-        Ok(())
-    }
-
-    fn limits(&self, channel: usize) -> Option<OutputLimits<T>> {
-        super::limits_at(
-            &self.blocks,
-            self.kernel.rows.limits(),
-            channel,
-            self.channels,
-        )
-    }
-
-    fn diagnostics(&self, channel: usize) -> Option<Diagnostics> {
-        super::diagnostics_of(&self.blocks, channel, self.channels)
-    }
-}
+compensator_bank!(IhcBank);
 
 /// Exact IHC on one segment of every lane (`crate::ihc::Eq5Exact`):
 /// `w + h(alpha w + beta) = y_d`.
@@ -348,6 +310,14 @@ impl PlantKernel<IhcMethod> {
 impl<T: Real, const W: usize> BlockKernel<T, W> for PlantKernel<IhcMethod> {
     const HEAD: usize = PlantRows::HEAD;
     const COUNTS: usize = PlantRows::COUNTS;
+
+    fn reset_block(&self, block: &mut Block<'_, T, W>) {
+        self.reset(block);
+    }
+
+    fn limit_rows(&self) -> (usize, usize) {
+        self.rows.limits()
+    }
 
     #[inline(always)]
     fn step(&self, block: &mut Block<'_, T, W>, desired: L<T, W>) -> L<T, W> {

@@ -33,6 +33,7 @@
 //! compile time, for a microcontroller ([`plant_bank_rows`], [`dihc_bank_rows`] give the
 //! sizes; `docs/microcontroller.md` lists the RAM per channel).
 
+mod channels;
 mod dihc;
 mod guard;
 mod ihc;
@@ -56,7 +57,6 @@ pub use storage::{BankStorage, Fixed, PLAIN_DEGREE, dihc_bank_rows, plant_bank_r
 pub use wihc::WihcBank;
 
 use crate::{CoreError, Diagnostics, OutputLimits, Real};
-use storage::{Blocks, LOOP_SATURATED, NON_FINITE, SATURATED};
 
 /// The default number of lanes (channels) per block: eight, the `f32` lanes of an AVX2
 /// register and two of them in `f64`.
@@ -259,33 +259,4 @@ pub fn check_signal(
         });
     }
     Ok(())
-}
-
-/// The output limits of `channel`, stored in the value rows `min_row` and `max_row` (`None`
-/// beyond the last channel).
-pub(crate) fn limits_at<T: Real, S: BankStorage<T, W>, const W: usize>(
-    blocks: &Blocks<T, S, W>,
-    (min_row, max_row): (usize, usize),
-    channel: usize,
-    channels: usize,
-) -> Option<OutputLimits<T>> {
-    if channel >= channels {
-        return None;
-    }
-    let min = blocks.value(channel, min_row);
-    let max = blocks.value(channel, max_row);
-    OutputLimits::new(min, max).ok()
-}
-
-/// The diagnostics of `channel` (`None` beyond the last channel).
-pub(crate) fn diagnostics_of<T: Real, S: BankStorage<T, W>, const W: usize>(
-    blocks: &Blocks<T, S, W>,
-    channel: usize,
-    channels: usize,
-) -> Option<Diagnostics> {
-    (channel < channels).then(|| Diagnostics {
-        saturated: blocks.counter(channel, SATURATED),
-        loop_saturated: blocks.counter(channel, LOOP_SATURATED),
-        non_finite: blocks.counter(channel, NON_FINITE),
-    })
 }

@@ -1,6 +1,7 @@
 //! What IHC and WIHC banks share: a channel's compensator written into its lane, and a block's
 //! input polynomials read back for the per-sample solve.
 
+use super::channels::Channels;
 use super::lanes::Lanes;
 use super::root::{CubicLanes, PolynomialLanes};
 use super::storage::{
@@ -28,6 +29,21 @@ pub(crate) struct PlantKernel<M> {
     method: PhantomData<M>,
 }
 
+impl<T: Real, S: BankStorage<T, W>, M, const W: usize> Channels<T, S, PlantKernel<M>, W> {
+    /// The solve mode of every channel.
+    pub fn mode(&self) -> SolveMode {
+        self.kernel.mode
+    }
+
+    /// The guard's under-relaxation `mu` of `channel` (`None` beyond the last channel).
+    pub fn relaxation(&self, channel: usize) -> Option<T> {
+        (channel < self.count).then(|| {
+            self.blocks
+                .value(channel, self.kernel.rows.scalar(PlantRows::RELAXATION))
+        })
+    }
+}
+
 /// The lanes channel `channel` of `channels` fills in `count` blocks of `W` lanes: its own,
 /// and for the last channel also the padding lanes after it (they are fed NaN: held).
 pub(crate) fn channel_lanes(
@@ -43,7 +59,7 @@ pub(crate) fn channel_lanes(
     }
 }
 
-/// The blocks and kernel of an IHC or WIHC bank: channel `c` is the single compensator
+/// The channels of an IHC or WIHC bank: channel `c` is the single compensator
 /// `build` makes from `plants[c]` with its limits and `mode` (a refused one named by its
 /// index), written into its lanes by `write`.
 pub(crate) fn plant_bank<T, S, B, C, M, const W: usize>(
@@ -52,7 +68,7 @@ pub(crate) fn plant_bank<T, S, B, C, M, const W: usize>(
     mode: SolveMode,
     build: impl Fn(&Mpim<T, B>, OutputLimits<T>, SolveMode) -> Result<C, CoreError>,
     write: impl Fn(&mut Blocks<T, S, W>, &PlantRows, usize, &C),
-) -> Result<(Blocks<T, S, W>, PlantKernel<M>), BankError>
+) -> Result<Channels<T, S, PlantKernel<M>, W>, BankError>
 where
     T: Real,
     S: BankStorage<T, W>,
@@ -82,7 +98,11 @@ where
         cubic: plants.iter().all(|p| p.input_polynomial().is_odd_cubic()),
         method: PhantomData,
     };
-    Ok((storage, kernel))
+    Ok(Channels {
+        blocks: storage,
+        kernel,
+        count: plants.len(),
+    })
 }
 
 /// Writes the state of one single-channel IHC or WIHC (its play-operator bank, input

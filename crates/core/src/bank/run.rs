@@ -22,6 +22,12 @@ pub(crate) trait BlockKernel<T: Real, const W: usize> {
     /// Steps the block with one desired position per lane (NaN for a padding lane) and returns
     /// one output per lane.
     fn step(&self, block: &mut Block<'_, T, W>, desired: Lanes<T, W>) -> Lanes<T, W>;
+
+    /// Every lane of the block back to its initial state.
+    fn reset_block(&self, block: &mut Block<'_, T, W>);
+
+    /// The value rows of the output limits `(min, max)`.
+    fn limit_rows(&self) -> (usize, usize);
 }
 
 /// The compilations of the banks' kernels (x86-64 with `std`): the one a bank uses is the widest

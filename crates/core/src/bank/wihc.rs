@@ -1,5 +1,6 @@
 //! A bank of WIHC channels (section 3.2, eq. (9)): [`crate::Wihc`] lane by lane.
 
+use super::channels::{Channels, compensator_bank};
 use super::guard::GuardLanes;
 use super::ihc::rounding_tolerance;
 use super::lanes::{Lanes, Mask};
@@ -12,10 +13,10 @@ use super::play::{
     update_memory_with,
 };
 use super::root::{LaneRemainder, increasing_root};
-use super::run::{BlockKernel, run};
-use super::storage::{BankStorage, Block, Blocks, PlantRows};
-use super::{BankError, CompensatorBank, LANES, check_tick};
-use crate::{Buffer, CoreError, Diagnostics, Mpim, OutputLimits, Real, SolveMode, Wihc};
+use super::run::BlockKernel;
+use super::storage::{BankStorage, Block, PlantRows};
+use super::{BankError, LANES};
+use crate::{Buffer, Mpim, OutputLimits, Real, SolveMode, Wihc};
 
 type L<T, const W: usize> = Lanes<T, W>;
 
@@ -24,9 +25,7 @@ type L<T, const W: usize> = Lanes<T, W>;
 /// [module documentation](super)).
 #[derive(Debug, Clone)]
 pub struct WihcBank<T: Real, S: BankStorage<T, W>, const W: usize = LANES> {
-    blocks: Blocks<T, S, W>,
-    kernel: WihcKernel,
-    channels: usize,
+    channels: Channels<T, S, WihcKernel, W>,
 }
 
 /// Marks the [`PlantKernel`] of a WIHC bank.
@@ -44,7 +43,7 @@ impl<T: Real, S: BankStorage<T, W>, const W: usize> WihcBank<T, S, W> {
         limits: &[OutputLimits<T>],
         mode: SolveMode,
     ) -> Result<Self, BankError> {
-        let (blocks, kernel) = plant_bank(
+        let channels = plant_bank(
             plants,
             limits,
             mode,
@@ -61,59 +60,22 @@ impl<T: Real, S: BankStorage<T, W>, const W: usize> WihcBank<T, S, W> {
                 )
             },
         )?;
-        Ok(WihcBank {
-            blocks,
-            kernel,
-            channels: plants.len(),
-        })
+        Ok(WihcBank { channels })
     }
 
     /// The solve mode of every channel.
     pub fn mode(&self) -> SolveMode {
-        self.kernel.mode
+        self.channels.mode()
     }
 
     /// The under-relaxation `mu` of [`SolveMode::DelayedGuarded`] of `channel` (see
     /// [`crate::Wihc::guard_relaxation`]).
     pub fn guard_relaxation(&self, channel: usize) -> Option<T> {
-        (channel < self.channels).then(|| {
-            self.blocks
-                .value(channel, self.kernel.rows.scalar(PlantRows::RELAXATION))
-        })
+        self.channels.relaxation(channel)
     }
 }
 
-impl<T: Real, S: BankStorage<T, W>, const W: usize> CompensatorBank<T> for WihcBank<T, S, W> {
-    fn channels(&self) -> usize {
-        self.channels
-    }
-
-    fn reset(&mut self) {
-        for mut block in self.blocks.blocks_mut() {
-            self.kernel.reset(&mut block);
-        }
-    }
-
-    #[inline]
-    fn step(&mut self, desired: &[T], control: &mut [T]) -> Result<(), CoreError> {
-        check_tick(self.channels, desired.len(), control.len(), "controls")?;
-        run(&self.kernel, self.blocks.blocks_mut(), desired, control);
-        Ok(())
-    }
-
-    fn limits(&self, channel: usize) -> Option<OutputLimits<T>> {
-        super::limits_at(
-            &self.blocks,
-            self.kernel.rows.limits(),
-            channel,
-            self.channels,
-        )
-    }
-
-    fn diagnostics(&self, channel: usize) -> Option<Diagnostics> {
-        super::diagnostics_of(&self.blocks, channel, self.channels)
-    }
-}
+compensator_bank!(WihcBank);
 
 /// Eq. (9) on one segment of every lane (`crate::wihc::Eq9`), in the voltage itself:
 /// `h(v) + alpha v + beta = y_d`.
@@ -337,6 +299,14 @@ impl PlantKernel<WihcMethod> {
 impl<T: Real, const W: usize> BlockKernel<T, W> for PlantKernel<WihcMethod> {
     const HEAD: usize = PlantRows::HEAD;
     const COUNTS: usize = PlantRows::COUNTS;
+
+    fn reset_block(&self, block: &mut Block<'_, T, W>) {
+        self.reset(block);
+    }
+
+    fn limit_rows(&self) -> (usize, usize) {
+        self.rows.limits()
+    }
 
     #[inline(always)]
     fn step(&self, block: &mut Block<'_, T, W>, desired: L<T, W>) -> L<T, W> {
