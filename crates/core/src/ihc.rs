@@ -18,7 +18,9 @@ use crate::{
 /// - [`SolveMode::Exact`]: `w` depends on the `v(t)` being computed; the implicit equation
 ///   `w + h(P1^{-1}[w](t)) = y_d(t)` is solved exactly each sample, so that the plant model
 ///   gives `P[v](t) = y_d(t)`.
-/// - [`SolveMode::Delayed`]: `w(t) = y_d(t) - h(v(t - Ts))`, as real-time implementations do.
+/// - [`SolveMode::Delayed`]: `w(t) = y_d(t) - h(v(t - Ts))`, as real-time implementations do,
+///   and `v(t) = P1^{-1}[w](t)` evaluated directly (the inverse's operators fed `w`, eq. (7));
+///   only a `v` beyond the limits walks the inverse's segments to stop at the limit.
 ///   While `y_d` holds, successive `w` differ by at most [`Ihc::delayed_loop_gain`] times the
 ///   previous difference (`|g'(x) - a2| / (a2 + b_1 + ... + b_k)` over the reachable branches,
 ///   see [`Mpim::delayed_ihc_loop_gain`]): below 1 the loop settles after any jump in `y_d`;
@@ -41,7 +43,9 @@ use crate::{
 ///   where `w(t - Ts) + h(v(t - Ts))` is the plant model's output for the previous drive
 ///   (`P1[P1^{-1}[w]] = w`, ERRATA item 3), so `e` is the model's tracking error, and `q_max`
 ///   is the largest signed gain `(g'(x) - a2) / (a2 + b_1 + ... + b_k)` over the reachable
-///   branches. With `mu = 1` a reachable sample is the plain delayed loop's, bit for bit.
+///   branches. With `mu = 1` a reachable sample is the plain delayed loop's to rounding (a
+///   few ulp: the plain loop evaluates `P1^{-1}[w]` directly, the guarded one on the segment
+///   its walk ends on).
 ///
 ///   *Proof sketch.* While `y_d` holds, moving `w` from `w(t - Ts)` to `w(t)` moves `v` along
 ///   `P1^{-1}` and the model's output by `integral (1 + q(k, v)) dw` over the move, where each
@@ -288,8 +292,17 @@ fn ihc_step<T: Real, B: Buffer<T>, R: Remainder<T>>(
         // y_d is reachable: a clamp here (rounding only, by the proof) is the loop's.
         return guard.emit_classified(v, solution.saturated, || true);
     }
-    // Eq. (5) with the loop broken: w(t) = y_d(t) - h(v(t - Ts)).
+    // Eq. (5) with the loop broken: w(t) = y_d(t) - h(v(t - Ts)), and v(t) = P1^{-1}[w](t)
+    // evaluated directly, the inverse PI part's operators fed w.
     let w = desired - h_prev;
+    let v = inverse.output_at(w);
+    if v >= guard.limits.min() && v <= guard.limits.max() {
+        inverse.feed(w);
+        return guard.emit_classified(v, false, || false);
+    }
+    // Beyond the limits (or not finite): the walk towards w, stopped at the limit, from the
+    // counts of the memory as it is (the direct evaluations above leave them unused).
+    inverse.recount();
     let solution = inverse.solve(&Eq5Delayed { w }, w_prev - w, guard.limits);
     // A clamped sample: was y_d reachable within the limits? The exact solve from the same
     // state says; it only runs when the delayed loop hit a limit.

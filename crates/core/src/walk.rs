@@ -16,7 +16,7 @@
 //! or two, a root solve and the memory update.
 
 use crate::buffer::{copied, filled};
-use crate::play::{feed_bank, one_sided};
+use crate::play::{feed_bank, four_way_sum, one_sided};
 use crate::{Buffer, CoreError, OutputLimits, Real};
 
 /// The equation a compensator solves on one linear segment of the bank, `PI(x) = alpha x + beta`.
@@ -240,6 +240,37 @@ impl<T: Real, B: Buffer<T>> PlayBank<T, B> {
         self.rising_active = update.rising;
         self.falling_active = update.falling;
         self.a * x + update.sum
+    }
+
+    /// The bank's output if `x` were fed, `a x + sum b_i F_{r_i}[x]`, without changing it: the
+    /// same bits as [`PlayBank::feed`] returns.
+    #[inline]
+    pub fn output_at(&self, x: T) -> T {
+        let (thresholds, weights, memory) = (
+            self.thresholds.as_ref(),
+            self.weights.as_ref(),
+            self.memory.as_ref(),
+        );
+        let n = memory.len().min(thresholds.len()).min(weights.len());
+        let (thresholds, weights, memory) = (&thresholds[..n], &weights[..n], &memory[..n]);
+        let sum = four_way_sum(n, |i| weights[i] * one_sided(x, thresholds[i], memory[i]));
+        self.a * x + sum
+    }
+
+    /// The counts of moving operators recomputed from the memory and the last input, as
+    /// [`PlayBank::feed`] counts them when it feeds that input (the same comparisons on the
+    /// same values): for a loop that feeds without using them and walks only now and then, so
+    /// that every walk starts from counts that do not depend on how the memory was reached.
+    pub fn recount(&mut self) {
+        let x = self.input;
+        let mut rising = 0usize;
+        let mut falling = 0usize;
+        for (&w, &r) in self.memory.as_ref().iter().zip(self.thresholds.as_ref()) {
+            rising += usize::from(w <= x - r);
+            falling += usize::from(w >= x);
+        }
+        self.rising_active = rising;
+        self.falling_active = falling;
     }
 
     /// Feeds the solution of [`PlayBank::solve`] itself (`x == solution.input`): the same memory

@@ -7,7 +7,10 @@ use super::plant::{
     PlantKernel, all_odd_cubic, cubic_lanes, guarded_target, plant_bank, polynomial_lanes,
     write_lane,
 };
-use super::play::{LaneEquation, PlayState, ReachOnly, feed, feed_solved, solve};
+use super::play::{
+    LaneEquation, PlayState, ReachOnly, feed, feed_solved, memory_sum_at, recount, solve,
+    update_memory_with,
+};
 use super::root::{LaneRemainder, increasing_root};
 use super::run::BlockKernel;
 use super::storage::{BankStorage, Block, PlantRows};
@@ -248,30 +251,58 @@ impl PlantKernel<IhcMethod> {
             let (out, clamped) = guard.clamp(v, solution.saturated | beyond);
             guard.record(out, clamped, !beyond, active)
         } else {
-            // w(t) = y_d(t) - h(v(t - Ts)).
+            // w(t) = y_d(t) - h(v(t - Ts)), and v(t) = P1^{-1}[w](t) evaluated directly
+            // (`crate::ihc::ihc_step`): the operators' sum at w, the memory fed only after.
             let w = desired - h_prev;
-            let delayed = Eq5Delayed { w };
-            let solution = solve(
-                block,
-                rows,
-                &state,
-                &delayed,
-                w_prev - w,
-                guard.min,
-                guard.max,
-                active,
-            );
-            // A clamped sample: was y_d reachable? The exact solve from the same state says.
-            let check = solution.saturated & active;
+            let sum = memory_sum_at(block, rows, state.operators, w, self.uniform);
+            let direct = state.a * w + sum;
+            let inside = active & direct.ge(guard.min) & direct.le(guard.max);
+            // Beyond the limits (or not finite): the walk towards w, stopped at the limit, from
+            // the counts of the memory as it is.
+            let walking = active.and_not(inside);
+            let mut v = direct;
+            let mut saturated = Mask::splat(false);
             let mut reachable = Mask::splat(false);
-            if check.any() {
-                let e = solve(
-                    block, rows, &state, &exact, f_exact, guard.min, guard.max, check,
+            if walking.any() {
+                recount(block, rows, &mut state);
+                let solution = solve(
+                    block,
+                    rows,
+                    &state,
+                    &Eq5Delayed { w },
+                    w_prev - w,
+                    guard.min,
+                    guard.max,
+                    walking,
                 );
-                reachable = check.and_not(e.saturated);
+                // A clamped sample: was y_d reachable? The exact solve from the same state
+                // says.
+                let check = solution.saturated & walking;
+                if check.any() {
+                    let e = solve(
+                        block, rows, &state, &exact, f_exact, guard.min, guard.max, check,
+                    );
+                    reachable = check.and_not(e.saturated);
+                }
+                let fed = feed_solved(block, rows, &mut state, &solution, walking, self.uniform);
+                v = fed.or_keep(walking, v);
+                saturated = solution.saturated & walking;
             }
-            let v = feed_solved(block, rows, &mut state, &solution, active, self.uniform);
-            let (out, clamped) = guard.clamp(v, solution.saturated);
+            // The memory of the lanes evaluated directly, and its sum (counts left unused).
+            update_memory_with::<_, _, false, false>(
+                block,
+                rows.thresholds(),
+                rows.weights(),
+                rows.memory(),
+                rows.n,
+                state.operators,
+                w,
+                inside,
+                self.uniform,
+            );
+            state.input = w.or_keep(inside, state.input);
+            state.memory_sum = sum.or_keep(inside, state.memory_sum);
+            let (out, clamped) = guard.clamp(v, saturated);
             guard.record(out, clamped, reachable, active)
         };
         state.store(block, rows);

@@ -354,10 +354,39 @@ pub(crate) fn update_memory_with<T: Real, const W: usize, const EDGES: bool, con
     };
     // Without counts or sum, the operators beyond a lane's own count change nothing it reads.
     if uniform || !(EDGES || SUM) {
-        rows.update::<EDGES, SUM, true>(operators, x, active)
+        rows.update::<EDGES, SUM, true, true>(operators, x, active)
     } else {
-        rows.update::<EDGES, SUM, false>(operators, x, active)
+        rows.update::<EDGES, SUM, false, true>(operators, x, active)
     }
+}
+
+/// `crate::walk::PlayBank::output_at` for every lane: the memory sum `sum b_i w_i` the
+/// operators would have after `x`, the same bits as [`update_memory`] gives, without changing
+/// the memory.
+#[inline(always)]
+pub(crate) fn memory_sum_at<T: Real, const W: usize>(
+    block: &mut Block<'_, T, W>,
+    rows: &PlantRows,
+    operators: U<W>,
+    x: L<T, W>,
+    uniform: bool,
+) -> L<T, W> {
+    let Some(operator_rows) = OperatorRows::of(
+        block,
+        rows.thresholds(),
+        rows.weights(),
+        rows.memory(),
+        rows.n,
+    ) else {
+        return Lanes::zero();
+    };
+    let all = Mask::splat(true);
+    let fed = if uniform {
+        operator_rows.update::<false, true, true, false>(operators, x, all)
+    } else {
+        operator_rows.update::<false, true, false, false>(operators, x, all)
+    };
+    fed.sum
 }
 
 /// The operator rows of a block: thresholds, weights and the memory they update.
@@ -394,32 +423,38 @@ impl<'a, T: Real, const W: usize> OperatorRows<'a, T, W> {
         })
     }
 
-    /// Feeds `x` to every operator (the memory of the lanes of `active`), counting the
-    /// operators at either edge (`EDGES`) and summing `b_i w_i` (`SUM`) as
-    /// `crate::play::four_way_sum` does for each lane's own operator count (`UNIFORM`: every
-    /// lane has them all).
+    /// Feeds `x` to every operator (the memory of the lanes of `active`; with `STORE` false
+    /// the memory is left as it was), counting the operators at either edge (`EDGES`) and
+    /// summing `b_i w_i` (`SUM`) as `crate::play::four_way_sum` does for each lane's own
+    /// operator count (`UNIFORM`: every lane has them all).
     ///
     /// With every lane active (the usual case) the memory rows are written whole
     /// ([`OperatorRows::update_all`]): a blend of the new memory with the old written back to
     /// the row it was read from becomes a masked store where the target has one, and AVX2's
     /// (`vmaskmovps`) costs many plain stores on some processors (AMD's).
     #[inline(always)]
-    fn update<const EDGES: bool, const SUM: bool, const UNIFORM: bool>(
+    fn update<const EDGES: bool, const SUM: bool, const UNIFORM: bool, const STORE: bool>(
         self,
         operators: U<W>,
         x: L<T, W>,
         active: Mask<T, W>,
     ) -> Fed<T, W> {
         if active.all() {
-            self.update_all::<EDGES, SUM, UNIFORM, true>(operators, x, active)
+            self.update_all::<EDGES, SUM, UNIFORM, true, STORE>(operators, x, active)
         } else {
-            self.update_all::<EDGES, SUM, UNIFORM, false>(operators, x, active)
+            self.update_all::<EDGES, SUM, UNIFORM, false, STORE>(operators, x, active)
         }
     }
 
     /// [`OperatorRows::update`], knowing (`ALL`) whether every lane is active.
     #[inline(always)]
-    fn update_all<const EDGES: bool, const SUM: bool, const UNIFORM: bool, const ALL: bool>(
+    fn update_all<
+        const EDGES: bool,
+        const SUM: bool,
+        const UNIFORM: bool,
+        const ALL: bool,
+        const STORE: bool,
+    >(
         self,
         operators: U<W>,
         x: L<T, W>,
@@ -440,7 +475,7 @@ impl<'a, T: Real, const W: usize> OperatorRows<'a, T, W> {
         let mut i = 0usize;
         for ((r4, b4), m4) in thresholds.iter().zip(weights).zip(memory.iter_mut()) {
             for j in 0..4 {
-                Self::operator::<EDGES, SUM, UNIFORM, ALL>(
+                Self::operator::<EDGES, SUM, UNIFORM, ALL, STORE>(
                     &mut acc,
                     i,
                     Some(j),
@@ -456,7 +491,7 @@ impl<'a, T: Real, const W: usize> OperatorRows<'a, T, W> {
             }
         }
         for ((r, b), m) in t_rest.iter().zip(b_rest).zip(m_rest.iter_mut()) {
-            Self::operator::<EDGES, SUM, UNIFORM, ALL>(
+            Self::operator::<EDGES, SUM, UNIFORM, ALL, STORE>(
                 &mut acc, i, None, *r, *b, m, operators, full, x, active,
             );
             i += 1;
@@ -480,7 +515,13 @@ impl<'a, T: Real, const W: usize> OperatorRows<'a, T, W> {
     /// beyond them.
     #[allow(clippy::too_many_arguments)]
     #[inline(always)]
-    fn operator<const EDGES: bool, const SUM: bool, const UNIFORM: bool, const ALL: bool>(
+    fn operator<
+        const EDGES: bool,
+        const SUM: bool,
+        const UNIFORM: bool,
+        const ALL: bool,
+        const STORE: bool,
+    >(
         acc: &mut Accumulated<T, W>,
         i: usize,
         group: Option<usize>,
@@ -497,11 +538,13 @@ impl<'a, T: Real, const W: usize> OperatorRows<'a, T, W> {
         let lower = x - r;
         let raised = lower.or_keep(w.lt(lower), w);
         let next = x.or_keep(raised.gt(x), raised);
-        *m = if ALL {
-            next.0
-        } else {
-            next.or_keep(active, w).0
-        };
+        if STORE {
+            *m = if ALL {
+                next.0
+            } else {
+                next.or_keep(active, w).0
+            };
+        }
         let i32 = i as u32;
         if EDGES {
             let (up, down) = if UNIFORM {
