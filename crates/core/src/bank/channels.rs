@@ -2,7 +2,7 @@
 //! the number of channels, with the [`CompensatorBank`] methods written once for
 //! [`super::IhcBank`], [`super::WihcBank`] and [`super::DihcBank`].
 
-use super::run::{BlockKernel, run};
+use super::run::BlockKernel;
 use super::storage::{BankStorage, Blocks, LOOP_SATURATED, NON_FINITE, SATURATED};
 use super::{CompensatorBank, check_tick};
 use crate::{CoreError, Diagnostics, OutputLimits, Real};
@@ -38,7 +38,8 @@ impl<T: Real, S: BankStorage<T, W>, K: BlockKernel<T, W>, const W: usize> Compen
     #[inline]
     fn step(&mut self, desired: &[T], control: &mut [T]) -> Result<(), CoreError> {
         check_tick(self.count, desired.len(), control.len(), "controls")?;
-        run(&self.kernel, self.blocks.blocks_mut(), desired, control);
+        self.kernel
+            .run_tick(self.blocks.blocks_mut(), desired, control);
         Ok(())
     }
 

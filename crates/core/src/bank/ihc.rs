@@ -12,7 +12,7 @@ use super::play::{
     update_memory_with,
 };
 use super::root::{LaneRemainder, increasing_root};
-use super::run::BlockKernel;
+use super::run::{BlockKernel, run};
 use super::storage::{BankStorage, Block, PlantRows};
 use super::{BankError, LANES};
 use crate::{Buffer, Ihc, Mpim, OutputLimits, Real, SolveMode};
@@ -194,7 +194,7 @@ impl<T: Real, const W: usize> LaneEquation<T, W> for ReachControl<T, W> {
 impl PlantKernel<IhcMethod> {
     /// One sample of every lane with the remainder `h` (`crate::ihc::ihc_step`).
     #[inline(always)]
-    fn step_with<T: Real, R: LaneRemainder<T, W>, const W: usize>(
+    fn step_with<T: Real, R: LaneRemainder<T, W>, const W: usize, const MODE: u8>(
         &self,
         block: &mut Block<'_, T, W>,
         desired: L<T, W>,
@@ -214,13 +214,13 @@ impl PlantKernel<IhcMethod> {
         let h_prev = remainder.value(v_prev);
         let exact = Eq5Exact { remainder, desired };
         let f_exact = w_prev + h_prev - desired;
-        let out = if self.mode == SolveMode::Exact {
+        let out = if MODE == EXACT {
             let solution = solve(
                 block, rows, &state, &exact, f_exact, guard.min, guard.max, active,
             );
             let v = feed_solved(block, rows, &mut state, &solution, active, self.uniform);
             guard.emit(v, solution.saturated, active)
-        } else if self.mode == SolveMode::DelayedGuarded {
+        } else if MODE == GUARDED {
             // Beyond reach: the exact solution's limit at once, counted (`crate::ihc::ihc_step`).
             let reach = solve(
                 block,
@@ -338,6 +338,61 @@ impl PlantKernel<IhcMethod> {
     }
 }
 
+/// [`SolveMode::Exact`], [`SolveMode::DelayedGuarded`] and the plain delayed modes, as the
+/// constant `MODE` of [`IhcMode`].
+const EXACT: u8 = 0;
+const GUARDED: u8 = 1;
+const DELAYED: u8 = 2;
+
+/// The IHC kernel with its solve mode fixed when compiled, so that each mode's loop over the
+/// blocks is compiled on its own (the bank's mode is set when it is built).
+#[derive(Clone, Copy)]
+struct IhcMode<const MODE: u8>(IhcKernel);
+
+impl PlantKernel<IhcMethod> {
+    /// One sample of a block in mode `MODE`, with the block's remainder (the paper's cubic in
+    /// every lane, or each lane's own polynomial).
+    #[inline(always)]
+    fn step_in<T: Real, const W: usize, const MODE: u8>(
+        &self,
+        block: &mut Block<'_, T, W>,
+        desired: L<T, W>,
+    ) -> L<T, W> {
+        let first = self.rows.coefficient(0);
+        if self.cubic || all_odd_cubic(block, PlantRows::ODD_CUBIC) {
+            let remainder = cubic_lanes(block, first);
+            self.step_with::<_, _, W, MODE>(block, desired, remainder)
+        } else {
+            let remainder = polynomial_lanes(
+                block,
+                first,
+                self.rows.degree,
+                PlantRows::DEGREE,
+                PlantRows::ODD_CUBIC,
+            );
+            self.step_with::<_, _, W, MODE>(block, desired, remainder)
+        }
+    }
+}
+
+impl<T: Real, const W: usize, const MODE: u8> BlockKernel<T, W> for IhcMode<MODE> {
+    const HEAD: usize = PlantRows::HEAD;
+    const COUNTS: usize = PlantRows::COUNTS;
+
+    #[inline(always)]
+    fn step(&self, block: &mut Block<'_, T, W>, desired: L<T, W>) -> L<T, W> {
+        self.0.step_in::<T, W, MODE>(block, desired)
+    }
+
+    fn reset_block(&self, block: &mut Block<'_, T, W>) {
+        self.0.reset(block);
+    }
+
+    fn limit_rows(&self) -> (usize, usize) {
+        self.0.rows.limits()
+    }
+}
+
 impl<T: Real, const W: usize> BlockKernel<T, W> for PlantKernel<IhcMethod> {
     const HEAD: usize = PlantRows::HEAD;
     const COUNTS: usize = PlantRows::COUNTS;
@@ -350,21 +405,27 @@ impl<T: Real, const W: usize> BlockKernel<T, W> for PlantKernel<IhcMethod> {
         self.rows.limits()
     }
 
-    #[inline(always)]
+    /// One block in the bank's mode (the ticks take [`IhcMode`]'s compilations instead).
     fn step(&self, block: &mut Block<'_, T, W>, desired: L<T, W>) -> L<T, W> {
-        let first = self.rows.coefficient(0);
-        if self.cubic || all_odd_cubic(block, PlantRows::ODD_CUBIC) {
-            let remainder = cubic_lanes(block, first);
-            self.step_with(block, desired, remainder)
-        } else {
-            let remainder = polynomial_lanes(
-                block,
-                first,
-                self.rows.degree,
-                PlantRows::DEGREE,
-                PlantRows::ODD_CUBIC,
-            );
-            self.step_with(block, desired, remainder)
+        match self.mode {
+            SolveMode::Exact => self.step_in::<T, W, EXACT>(block, desired),
+            SolveMode::DelayedGuarded => self.step_in::<T, W, GUARDED>(block, desired),
+            _ => self.step_in::<T, W, DELAYED>(block, desired),
+        }
+    }
+
+    fn run_tick<'a>(
+        &self,
+        blocks: impl Iterator<Item = Block<'a, T, W>>,
+        desired: &[T],
+        control: &mut [T],
+    ) where
+        T: 'a,
+    {
+        match self.mode {
+            SolveMode::Exact => run(&IhcMode::<EXACT>(*self), blocks, desired, control),
+            SolveMode::DelayedGuarded => run(&IhcMode::<GUARDED>(*self), blocks, desired, control),
+            _ => run(&IhcMode::<DELAYED>(*self), blocks, desired, control),
         }
     }
 }

@@ -28,6 +28,20 @@ pub(crate) trait BlockKernel<T: Real, const W: usize> {
 
     /// The value rows of the output limits `(min, max)`.
     fn limit_rows(&self) -> (usize, usize);
+
+    /// Steps every block for one control tick ([`run`]). A kernel whose mode is set when the
+    /// bank is built may run a compilation specialised to it instead.
+    fn run_tick<'a>(
+        &self,
+        blocks: impl Iterator<Item = Block<'a, T, W>>,
+        desired: &[T],
+        control: &mut [T],
+    ) where
+        Self: Sized,
+        T: 'a,
+    {
+        run(self, blocks, desired, control)
+    }
 }
 
 /// The compilations of the banks' kernels (x86-64 with `std`): the one a bank uses is the widest
