@@ -2,7 +2,7 @@
 //! the number of channels, with the [`CompensatorBank`] methods written once for
 //! [`super::IhcBank`], [`super::WihcBank`] and [`super::DihcBank`].
 
-use super::run::BlockKernel;
+use super::run::BankKernel;
 use super::storage::{BankStorage, Blocks, LOOP_SATURATED, NON_FINITE, SATURATED};
 use super::{CompensatorBank, check_tick};
 use crate::{CoreError, Diagnostics, OutputLimits, Real};
@@ -15,14 +15,14 @@ pub(crate) struct Channels<T: Real, S: BankStorage<T, W>, K, const W: usize> {
     pub count: usize,
 }
 
-impl<T: Real, S: BankStorage<T, W>, K: BlockKernel<T, W>, const W: usize> Channels<T, S, K, W> {
+impl<T: Real, S: BankStorage<T, W>, K, const W: usize> Channels<T, S, K, W> {
     /// The value of row `row` of `channel` (`None` beyond the last channel).
     pub fn value(&self, channel: usize, row: usize) -> Option<T> {
         (channel < self.count).then(|| self.blocks.value(channel, row))
     }
 }
 
-impl<T: Real, S: BankStorage<T, W>, K: BlockKernel<T, W>, const W: usize> CompensatorBank<T>
+impl<T: Real, S: BankStorage<T, W>, K: BankKernel<T, W>, const W: usize> CompensatorBank<T>
     for Channels<T, S, K, W>
 {
     fn channels(&self) -> usize {

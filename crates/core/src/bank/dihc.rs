@@ -6,7 +6,7 @@ use super::lanes::Lanes;
 use super::plant::{all_odd_cubic, channel_lanes, cubic_lanes, polynomial_lanes, write_counters};
 use super::play::update_memory_with;
 use super::root::LaneRemainder;
-use super::run::BlockKernel;
+use super::run::{BankKernel, BlockKernel, run};
 use super::storage::{BankStorage, Block, Blocks, InverseRows, blocks};
 use super::{BankError, LANES, check_bank_size, limits_of};
 use crate::{Buffer, CoreError, Dihc, Mpim, OutputLimits, Real};
@@ -190,29 +190,11 @@ impl DihcKernel {
         guard.store(block, rows.scalar(InverseRows::PREVIOUS));
         out
     }
-
-    /// `Dihc::reset` for every lane of a block.
-    fn reset<T: Real, const W: usize>(&self, block: &mut Block<'_, T, W>) {
-        let mut guard = self.guard(block);
-        for i in 0..self.rows.n {
-            block.set(self.rows.memory() + i, Lanes::zero());
-        }
-        guard.reset();
-        guard.store(block, self.rows.scalar(InverseRows::PREVIOUS));
-    }
 }
 
 impl<T: Real, const W: usize> BlockKernel<T, W> for DihcKernel {
     const HEAD: usize = InverseRows::HEAD;
     const COUNTS: usize = InverseRows::COUNTS;
-
-    fn reset_block(&self, block: &mut Block<'_, T, W>) {
-        self.reset(block);
-    }
-
-    fn limit_rows(&self) -> (usize, usize) {
-        self.rows.limits()
-    }
 
     #[inline(always)]
     fn step(&self, block: &mut Block<'_, T, W>, desired: L<T, W>) -> L<T, W> {
@@ -230,5 +212,32 @@ impl<T: Real, const W: usize> BlockKernel<T, W> for DihcKernel {
             );
             self.step_with(block, desired, remainder)
         }
+    }
+}
+
+impl<T: Real, const W: usize> BankKernel<T, W> for DihcKernel {
+    /// `Dihc::reset` for every lane of a block.
+    fn reset_block(&self, block: &mut Block<'_, T, W>) {
+        let mut guard = self.guard(block);
+        for i in 0..self.rows.n {
+            block.set(self.rows.memory() + i, Lanes::zero());
+        }
+        guard.reset();
+        guard.store(block, self.rows.scalar(InverseRows::PREVIOUS));
+    }
+
+    fn limit_rows(&self) -> (usize, usize) {
+        self.rows.limits()
+    }
+
+    fn run_tick<'a>(
+        &self,
+        blocks: impl Iterator<Item = Block<'a, T, W>>,
+        desired: &[T],
+        control: &mut [T],
+    ) where
+        T: 'a,
+    {
+        run(self, blocks, desired, control)
     }
 }

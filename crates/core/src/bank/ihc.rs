@@ -12,7 +12,7 @@ use super::play::{
     update_memory_with,
 };
 use super::root::{LaneRemainder, increasing_root};
-use super::run::{BlockKernel, run};
+use super::run::{BankKernel, BlockKernel, run};
 use super::storage::{BankStorage, Block, PlantRows};
 use super::{BankError, LANES};
 use crate::{Buffer, Ihc, Mpim, OutputLimits, Real, SolveMode};
@@ -309,33 +309,6 @@ impl PlantKernel<IhcMethod> {
         guard.store(block, rows.scalar(PlantRows::PREVIOUS));
         out
     }
-
-    /// `Ihc::reset` for every lane of a block.
-    fn reset<T: Real, const W: usize>(&self, block: &mut Block<'_, T, W>) {
-        let rows = &self.rows;
-        let mut guard = GuardLanes::load(
-            block,
-            rows.scalar(PlantRows::LIMIT_MIN),
-            rows.scalar(PlantRows::LIMIT_MAX),
-            rows.scalar(PlantRows::PREVIOUS),
-        );
-        let mut state = PlayState::load(block, rows);
-        super::play::reset(block, rows, &mut state);
-        guard.reset();
-        // 0 outside the limits: start from the nearest limit, feeding the w that P1^{-1} maps
-        // to it.
-        let v0 = guard.previous;
-        let away = v0.compare(Lanes::zero(), |a, b| a != b);
-        if away.any() {
-            let equation = ReachControl { control: v0 };
-            let s = solve(
-                block, rows, &state, &equation, -v0, guard.min, guard.max, away,
-            );
-            feed(block, rows, &mut state, s.input, away, self.uniform);
-        }
-        state.store(block, rows);
-        guard.store(block, rows.scalar(PlantRows::PREVIOUS));
-    }
 }
 
 /// [`SolveMode::Exact`], [`SolveMode::DelayedGuarded`] and the plain delayed modes, as the
@@ -383,35 +356,38 @@ impl<T: Real, const W: usize, const MODE: u8> BlockKernel<T, W> for IhcMode<MODE
     fn step(&self, block: &mut Block<'_, T, W>, desired: L<T, W>) -> L<T, W> {
         self.0.step_in::<T, W, MODE>(block, desired)
     }
-
-    fn reset_block(&self, block: &mut Block<'_, T, W>) {
-        self.0.reset(block);
-    }
-
-    fn limit_rows(&self) -> (usize, usize) {
-        self.0.rows.limits()
-    }
 }
 
-impl<T: Real, const W: usize> BlockKernel<T, W> for PlantKernel<IhcMethod> {
-    const HEAD: usize = PlantRows::HEAD;
-    const COUNTS: usize = PlantRows::COUNTS;
-
+impl<T: Real, const W: usize> BankKernel<T, W> for PlantKernel<IhcMethod> {
+    /// `Ihc::reset` for every lane of a block.
     fn reset_block(&self, block: &mut Block<'_, T, W>) {
-        self.reset(block);
+        let rows = &self.rows;
+        let mut guard = GuardLanes::load(
+            block,
+            rows.scalar(PlantRows::LIMIT_MIN),
+            rows.scalar(PlantRows::LIMIT_MAX),
+            rows.scalar(PlantRows::PREVIOUS),
+        );
+        let mut state = PlayState::load(block, rows);
+        super::play::reset(block, rows, &mut state);
+        guard.reset();
+        // 0 outside the limits: start from the nearest limit, feeding the w that P1^{-1} maps
+        // to it.
+        let v0 = guard.previous;
+        let away = v0.compare(Lanes::zero(), |a, b| a != b);
+        if away.any() {
+            let equation = ReachControl { control: v0 };
+            let s = solve(
+                block, rows, &state, &equation, -v0, guard.min, guard.max, away,
+            );
+            feed(block, rows, &mut state, s.input, away, self.uniform);
+        }
+        state.store(block, rows);
+        guard.store(block, rows.scalar(PlantRows::PREVIOUS));
     }
 
     fn limit_rows(&self) -> (usize, usize) {
         self.rows.limits()
-    }
-
-    /// One block in the bank's mode (the ticks take [`IhcMode`]'s compilations instead).
-    fn step(&self, block: &mut Block<'_, T, W>, desired: L<T, W>) -> L<T, W> {
-        match self.mode {
-            SolveMode::Exact => self.step_in::<T, W, EXACT>(block, desired),
-            SolveMode::DelayedGuarded => self.step_in::<T, W, GUARDED>(block, desired),
-            _ => self.step_in::<T, W, DELAYED>(block, desired),
-        }
     }
 
     fn run_tick<'a>(

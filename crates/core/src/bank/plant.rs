@@ -37,10 +37,7 @@ impl<T: Real, S: BankStorage<T, W>, M, const W: usize> Channels<T, S, PlantKerne
 
     /// The guard's under-relaxation `mu` of `channel` (`None` beyond the last channel).
     pub fn relaxation(&self, channel: usize) -> Option<T> {
-        (channel < self.count).then(|| {
-            self.blocks
-                .value(channel, self.kernel.rows.scalar(PlantRows::RELAXATION))
-        })
+        self.value(channel, self.kernel.rows.scalar(PlantRows::RELAXATION))
     }
 }
 

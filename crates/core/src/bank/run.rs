@@ -22,26 +22,25 @@ pub(crate) trait BlockKernel<T: Real, const W: usize> {
     /// Steps the block with one desired position per lane (NaN for a padding lane) and returns
     /// one output per lane.
     fn step(&self, block: &mut Block<'_, T, W>, desired: Lanes<T, W>) -> Lanes<T, W>;
+}
 
+/// What a bank asks of its kernel besides one block's sample (`super::channels::Channels`).
+pub(crate) trait BankKernel<T: Real, const W: usize> {
     /// Every lane of the block back to its initial state.
     fn reset_block(&self, block: &mut Block<'_, T, W>);
 
     /// The value rows of the output limits `(min, max)`.
     fn limit_rows(&self) -> (usize, usize);
 
-    /// Steps every block for one control tick ([`run`]). A kernel whose mode is set when the
-    /// bank is built may run a compilation specialised to it instead.
+    /// Steps every block for one control tick: [`run`] with a [`BlockKernel`] (for a bank whose
+    /// mode is set when it is built, the compilation specialised to that mode).
     fn run_tick<'a>(
         &self,
         blocks: impl Iterator<Item = Block<'a, T, W>>,
         desired: &[T],
         control: &mut [T],
     ) where
-        Self: Sized,
-        T: 'a,
-    {
-        run(self, blocks, desired, control)
-    }
+        T: 'a;
 }
 
 /// The compilations of the banks' kernels (x86-64 with `std`): the one a bank uses is the widest

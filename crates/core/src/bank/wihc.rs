@@ -13,7 +13,7 @@ use super::play::{
     update_memory_with,
 };
 use super::root::{LaneRemainder, increasing_root};
-use super::run::BlockKernel;
+use super::run::{BankKernel, BlockKernel, run};
 use super::storage::{BankStorage, Block, PlantRows};
 use super::{BankError, LANES};
 use crate::{Buffer, Mpim, OutputLimits, Real, SolveMode, Wihc};
@@ -272,9 +272,34 @@ impl PlantKernel<WihcMethod> {
         guard.store(block, rows.scalar(PlantRows::PREVIOUS));
         out
     }
+}
 
+impl<T: Real, const W: usize> BlockKernel<T, W> for PlantKernel<WihcMethod> {
+    const HEAD: usize = PlantRows::HEAD;
+    const COUNTS: usize = PlantRows::COUNTS;
+
+    #[inline(always)]
+    fn step(&self, block: &mut Block<'_, T, W>, desired: L<T, W>) -> L<T, W> {
+        let first = self.rows.coefficient(0);
+        if self.cubic || all_odd_cubic(block, PlantRows::ODD_CUBIC) {
+            let remainder = cubic_lanes(block, first);
+            self.step_with(block, desired, remainder)
+        } else {
+            let remainder = polynomial_lanes(
+                block,
+                first,
+                self.rows.degree,
+                PlantRows::DEGREE,
+                PlantRows::ODD_CUBIC,
+            );
+            self.step_with(block, desired, remainder)
+        }
+    }
+}
+
+impl<T: Real, const W: usize> BankKernel<T, W> for PlantKernel<WihcMethod> {
     /// `Wihc::reset` for every lane of a block.
-    fn reset<T: Real, const W: usize>(&self, block: &mut Block<'_, T, W>) {
+    fn reset_block(&self, block: &mut Block<'_, T, W>) {
         let rows = &self.rows;
         let mut guard = GuardLanes::load(
             block,
@@ -294,35 +319,19 @@ impl PlantKernel<WihcMethod> {
         state.store(block, rows);
         guard.store(block, rows.scalar(PlantRows::PREVIOUS));
     }
-}
-
-impl<T: Real, const W: usize> BlockKernel<T, W> for PlantKernel<WihcMethod> {
-    const HEAD: usize = PlantRows::HEAD;
-    const COUNTS: usize = PlantRows::COUNTS;
-
-    fn reset_block(&self, block: &mut Block<'_, T, W>) {
-        self.reset(block);
-    }
 
     fn limit_rows(&self) -> (usize, usize) {
         self.rows.limits()
     }
 
-    #[inline(always)]
-    fn step(&self, block: &mut Block<'_, T, W>, desired: L<T, W>) -> L<T, W> {
-        let first = self.rows.coefficient(0);
-        if self.cubic || all_odd_cubic(block, PlantRows::ODD_CUBIC) {
-            let remainder = cubic_lanes(block, first);
-            self.step_with(block, desired, remainder)
-        } else {
-            let remainder = polynomial_lanes(
-                block,
-                first,
-                self.rows.degree,
-                PlantRows::DEGREE,
-                PlantRows::ODD_CUBIC,
-            );
-            self.step_with(block, desired, remainder)
-        }
+    fn run_tick<'a>(
+        &self,
+        blocks: impl Iterator<Item = Block<'a, T, W>>,
+        desired: &[T],
+        control: &mut [T],
+    ) where
+        T: 'a,
+    {
+        run(self, blocks, desired, control)
     }
 }
