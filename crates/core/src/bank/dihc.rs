@@ -176,10 +176,7 @@ impl DihcKernel {
         let g = remainder.input_function(x, block.get(rows.coefficient(0)));
         let fed = update_memory_with::<_, _, false, true>(
             block,
-            rows.thresholds(),
-            rows.weights(),
-            rows.memory(),
-            rows.n,
+            rows.operators(),
             block.count(InverseRows::OPERATORS),
             x,
             active,

@@ -291,10 +291,7 @@ impl PlantKernel<IhcMethod> {
             // The memory of the lanes evaluated directly, and its sum (counts left unused).
             update_memory_with::<_, _, false, false>(
                 block,
-                rows.thresholds(),
-                rows.weights(),
-                rows.memory(),
-                rows.n,
+                rows.operators(),
                 state.operators,
                 w,
                 inside,

@@ -8,7 +8,7 @@
 //! end on the first segment, so a block usually walks once.
 
 use super::lanes::{Lanes, Mask};
-use super::storage::{Block, PlantRows, gather};
+use super::storage::{Block, OperatorTables, PlantRows, gather};
 use crate::Real;
 use crate::walk::SYNC_INTERVAL;
 
@@ -299,14 +299,10 @@ pub(crate) struct Fed<T, const W: usize> {
 /// With `count`, also counts the operators at either edge of their band and sums `b_i w_i` in
 /// four partial sums exactly as `crate::play::four_way_sum` does for each lane's own operator
 /// count (`uniform`: every lane has the bank's `rows.n` operators).
-#[allow(clippy::too_many_arguments)]
 #[inline(always)]
 pub(crate) fn update_memory<T: Real, const W: usize>(
     block: &mut Block<'_, T, W>,
-    thresholds: usize,
-    weights: usize,
-    memory: usize,
-    n: usize,
+    tables: OperatorTables,
     operators: U<W>,
     x: L<T, W>,
     active: Mask<T, W>,
@@ -314,13 +310,9 @@ pub(crate) fn update_memory<T: Real, const W: usize>(
     uniform: bool,
 ) -> Fed<T, W> {
     if count {
-        update_memory_with::<_, _, true, true>(
-            block, thresholds, weights, memory, n, operators, x, active, uniform,
-        )
+        update_memory_with::<_, _, true, true>(block, tables, operators, x, active, uniform)
     } else {
-        update_memory_with::<_, _, false, false>(
-            block, thresholds, weights, memory, n, operators, x, active, uniform,
-        )
+        update_memory_with::<_, _, false, false>(block, tables, operators, x, active, uniform)
     }
 }
 
@@ -331,20 +323,16 @@ pub(crate) fn update_memory<T: Real, const W: usize>(
 /// partial sums stay in registers; each combination of `EDGES`, `SUM` and `uniform` has its
 /// own loop (no test inside it). `EDGES` and `SUM` are constants of each call, so that only
 /// the loops a kernel uses are compiled into it (every one is inlined into every vector path).
-#[allow(clippy::too_many_arguments)]
 #[inline(always)]
 pub(crate) fn update_memory_with<T: Real, const W: usize, const EDGES: bool, const SUM: bool>(
     block: &mut Block<'_, T, W>,
-    thresholds: usize,
-    weights: usize,
-    memory: usize,
-    n: usize,
+    tables: OperatorTables,
     operators: U<W>,
     x: L<T, W>,
     active: Mask<T, W>,
     uniform: bool,
 ) -> Fed<T, W> {
-    let Some(rows) = OperatorRows::of(block, thresholds, weights, memory, n) else {
+    let Some(rows) = OperatorRows::of(block, tables) else {
         // The layouts always hold the rows (thresholds and weights before the memory).
         return Fed {
             rising: Lanes::splat(0),
@@ -371,13 +359,7 @@ pub(crate) fn memory_sum_at<T: Real, const W: usize>(
     x: L<T, W>,
     uniform: bool,
 ) -> L<T, W> {
-    let Some(operator_rows) = OperatorRows::of(
-        block,
-        rows.thresholds(),
-        rows.weights(),
-        rows.memory(),
-        rows.n,
-    ) else {
+    let Some(operator_rows) = OperatorRows::of(block, rows.operators()) else {
         return Lanes::zero();
     };
     let all = Mask::splat(true);
@@ -408,13 +390,13 @@ impl<'a, T: Real, const W: usize> OperatorRows<'a, T, W> {
     /// `n` rows of each from `thresholds`, `weights` and `memory` (the first two before the
     /// third), if the block holds them.
     #[inline(always)]
-    fn of(
-        block: &'a mut Block<'_, T, W>,
-        thresholds: usize,
-        weights: usize,
-        memory: usize,
-        n: usize,
-    ) -> Option<Self> {
+    fn of(block: &'a mut Block<'_, T, W>, tables: OperatorTables) -> Option<Self> {
+        let OperatorTables {
+            thresholds,
+            weights,
+            memory,
+            n,
+        } = tables;
         let (head, rest) = block.values.split_at_mut_checked(memory)?;
         Some(OperatorRows {
             thresholds: head.get(thresholds..thresholds.checked_add(n)?)?,
@@ -596,10 +578,7 @@ pub(crate) fn feed<T: Real, const W: usize>(
 ) -> L<T, W> {
     let fed = update_memory(
         block,
-        rows.thresholds(),
-        rows.weights(),
-        rows.memory(),
-        rows.n,
+        rows.operators(),
         state.operators,
         x,
         active,
@@ -658,10 +637,7 @@ pub(crate) fn feed_solved_or_full<T: Real, const W: usize>(
     let recount = (sync | full) & active;
     let fed = update_memory(
         block,
-        rows.thresholds(),
-        rows.weights(),
-        rows.memory(),
-        rows.n,
+        rows.operators(),
         state.operators,
         x,
         active,

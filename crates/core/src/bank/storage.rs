@@ -108,6 +108,16 @@ pub(crate) const SATURATED: usize = 0;
 pub(crate) const LOOP_SATURATED: usize = 1;
 pub(crate) const NON_FINITE: usize = 2;
 
+/// Where a block's play operators are: the first rows of their thresholds, weights and memory,
+/// and how many operator rows each table has.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) struct OperatorTables {
+    pub thresholds: usize,
+    pub weights: usize,
+    pub memory: usize,
+    pub n: usize,
+}
+
 /// The rows of one block of an IHC or WIHC bank: the lanes' play-operator bank (the inverse
 /// PI part of eq. (7) for IHC, the plant's PI part for WIHC) with its tables and state, the
 /// output guard and the input polynomial.
@@ -153,6 +163,15 @@ impl PlantRows {
     }
     pub const fn memory(&self) -> usize {
         self.tables() + 4 * self.n
+    }
+    /// The operators' thresholds, weights and memory.
+    pub const fn operators(&self) -> OperatorTables {
+        OperatorTables {
+            thresholds: self.thresholds(),
+            weights: self.weights(),
+            memory: self.memory(),
+            n: self.n,
+        }
     }
     pub const fn scalar(&self, which: usize) -> usize {
         which
@@ -217,6 +236,15 @@ impl InverseRows {
     }
     pub const fn memory(&self) -> usize {
         self.tables() + 2 * self.n
+    }
+    /// The operators' thresholds, weights and memory.
+    pub const fn operators(&self) -> OperatorTables {
+        OperatorTables {
+            thresholds: self.thresholds(),
+            weights: self.weights(),
+            memory: self.memory(),
+            n: self.n,
+        }
     }
     pub const fn scalar(&self, which: usize) -> usize {
         which

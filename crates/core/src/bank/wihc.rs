@@ -255,10 +255,7 @@ impl PlantKernel<WihcMethod> {
             // which only the walk above reads, are recomputed before it runs.
             let fed = update_memory_with::<_, _, false, true>(
                 block,
-                rows.thresholds(),
-                rows.weights(),
-                rows.memory(),
-                rows.n,
+                rows.operators(),
                 state.operators,
                 v,
                 active,
