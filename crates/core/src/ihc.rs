@@ -30,9 +30,12 @@ use crate::{
 /// - [`SolveMode::DelayedAllowUnstable`]: the same loop without that check (the explicit
 ///   override).
 /// - [`SolveMode::DelayedGuarded`]: an under-relaxed delayed loop that cannot oscillate,
-///   whatever the model. Each sample first walks the inverse's segments with the exact
-///   residual of eq. (5), without solving on the last one (the walk alone, no root), to learn
-///   whether `y_d` is reachable within the limits from the current state. When it is not, the
+///   whatever the model. Each sample first asks whether `y_d` is reachable within the limits
+///   from the current state: at once when the relaxed step's `v = P1^{-1}[w]`, evaluated
+///   directly, lies within the limits and eq. (5)'s residual changes sign between
+///   `w(t - Ts)` and `w` (the exact root lies between them; then that `v` is the output),
+///   otherwise by walking the inverse's segments with the exact residual, without solving on
+///   the last one (the walk alone, no root). When it is not, the
 ///   exact solution is the limit in the direction of travel: the guarded loop emits it at once
 ///   (bit for bit the exact IHC's output) and counts the sample in
 ///   [`Diagnostics::saturated`]. When it is, the loop takes the under-relaxed step
@@ -43,9 +46,9 @@ use crate::{
 ///   where `w(t - Ts) + h(v(t - Ts))` is the plant model's output for the previous drive
 ///   (`P1[P1^{-1}[w]] = w`, ERRATA item 3), so `e` is the model's tracking error, and `q_max`
 ///   is the largest signed gain `(g'(x) - a2) / (a2 + b_1 + ... + b_k)` over the reachable
-///   branches. With `mu = 1` a reachable sample is the plain delayed loop's to rounding (a
-///   few ulp: the plain loop evaluates `P1^{-1}[w]` directly, the guarded one on the segment
-///   its walk ends on).
+///   branches. With `mu = 1` a reachable sample is the plain delayed loop's, bit for bit when
+///   both evaluate `P1^{-1}[w]` directly, otherwise to rounding (a few ulp: the walk ends on a
+///   segment and evaluates it there).
 ///
 ///   *Proof sketch.* While `y_d` holds, moving `w` from `w(t - Ts)` to `w(t)` moves `v` along
 ///   `P1^{-1}` and the model's output by `integral (1 + q(k, v)) dw` over the move, where each
@@ -65,8 +68,10 @@ use crate::{
 /// solve of eq. (5) from the same state, only to classify the clamp (reachable:
 /// [`Diagnostics::loop_saturated`]; not: [`Diagnostics::saturated`]), so it costs about one
 /// exact step more; real-time budgets should use the delayed step plus the exact step. The
-/// guarded loop walks twice every sample (the reachability walk, then the relaxed step's),
-/// never solving a root of the cubic: its worst case is two walks over the operators.
+/// guarded loop mostly costs the plain one's direct evaluation; a sample it cannot settle so
+/// (near a limit, or a relaxed step with `mu < 1` that stops short of the root) walks twice
+/// (the reachability walk, then the relaxed step's), never solving a root of the cubic: its
+/// worst case is one evaluation and two walks over the operators.
 ///
 /// See [`Compensator`] for the output guarantees.
 #[derive(Debug, Clone)]
@@ -79,6 +84,9 @@ pub struct Ihc<T: Real, B: Buffer<T>> {
     pub(crate) mode: SolveMode,
     /// `mu` of [`SolveMode::DelayedGuarded`], whatever the mode.
     pub(crate) relaxation: T,
+    /// [`PlayBank::least_inverse_alpha`] of the inverse: the guarded loop's bound on how far
+    /// `w` must move before `P1^{-1}[w]` reaches a limit.
+    pub(crate) least_inverse_alpha: T,
     /// The delayed loop's worst-case gain over the limits, whatever the mode (kept: it needs
     /// the plant's thresholds and weights, which the compensator does not keep).
     pub(crate) loop_gain: LoopGain<T>,
@@ -114,8 +122,10 @@ impl<T: Real, B: Buffer<T>> Ihc<T, B> {
                 active_operators: gains.worst.active_operators,
             });
         }
+        let bank = PlayBank::new(inverse.a2(), inverse.thresholds(), inverse.weights())?;
         let mut ihc = Ihc {
-            inverse: PlayBank::new(inverse.a2(), inverse.thresholds(), inverse.weights())?,
+            least_inverse_alpha: bank.least_inverse_alpha(),
+            inverse: bank,
             input: *plant.input_polynomial(),
             mode,
             relaxation: gains.relaxation(),
@@ -249,6 +259,41 @@ impl<T: Real> SegmentEquation<T> for ReachControl<T> {
     }
 }
 
+/// Whether the guarded loop's step to `w`, whose `v = P1^{-1}[w]` was evaluated directly,
+/// proves `y_d` reachable within the limits, so that `v` is the step's output without a walk.
+///
+/// Eq. (5)'s residual `F(x) = x + h(P1^{-1}[x]) - y_d` increases in `x`, and `P1^{-1}`, moved
+/// monotonically from `w(t - Ts)`, gives at each `x` what feeding `x` at once gives. Rising
+/// (`F(w(t - Ts)) <= 0`, `w >= w(t - Ts)`, `v <= v_max`): the root lies before the limit when
+/// `F` is already `>= 0` at `w`, or at the `x_max` where `P1^{-1}` reaches `v_max`, which lies
+/// at least `least_inverse_alpha (v_max - v)` beyond `w`: `F(x_max) >= w +
+/// least_inverse_alpha (v_max - v) + h(v_max) - y_d >= 0`. Falling, the mirror image.
+#[allow(clippy::too_many_arguments)]
+#[inline(always)]
+fn guarded_reach<T: Real, R: Remainder<T>>(
+    limits: OutputLimits<T>,
+    least_inverse_alpha: T,
+    remainder: R,
+    desired: T,
+    f_exact: T,
+    w_prev: T,
+    w: T,
+    v: T,
+) -> bool {
+    let (min, max) = (limits.min(), limits.max());
+    if !(v >= min && v <= max) {
+        return false;
+    }
+    let f_w = w + remainder.value(v) - desired;
+    if f_exact <= T::zero() {
+        let at_limit = w + least_inverse_alpha * (max - v) + remainder.value(max) - desired;
+        w >= w_prev && (f_w >= T::zero() || at_limit >= T::zero())
+    } else {
+        let at_limit = w - least_inverse_alpha * (v - min) + remainder.value(min) - desired;
+        w <= w_prev && (f_w <= T::zero() || at_limit <= T::zero())
+    }
+}
+
 /// One sample of IHC with the remainder `h` (the paper's cubic or a higher-degree one, each
 /// specialised).
 #[inline(always)]
@@ -257,6 +302,7 @@ fn ihc_step<T: Real, B: Buffer<T>, R: Remainder<T>>(
     guard: &mut OutputGuard<T>,
     mode: SolveMode,
     relaxation: T,
+    least_inverse_alpha: T,
     remainder: R,
     desired: T,
 ) -> T {
@@ -273,13 +319,6 @@ fn ihc_step<T: Real, B: Buffer<T>, R: Remainder<T>>(
         return guard.emit(v, solution.saturated);
     }
     if mode == SolveMode::DelayedGuarded {
-        // Beyond reach from this state: the exact solution is the limit in the direction of
-        // travel; emitted at once and counted, as the exact IHC does.
-        let reach = inverse.solve(&ReachOnly(&exact), f_exact, guard.limits);
-        if reach.saturated {
-            let v = inverse.feed_solved(&reach);
-            return guard.emit(v, true);
-        }
         // The under-relaxed w(t - Ts) + mu (y_d(t) - w(t - Ts) - h(v(t - Ts))); with mu = 1
         // the plain delayed loop's w.
         let w = if relaxation < T::one() {
@@ -287,6 +326,29 @@ fn ihc_step<T: Real, B: Buffer<T>, R: Remainder<T>>(
         } else {
             desired - h_prev
         };
+        let v = inverse.output_at(w);
+        if guarded_reach(
+            guard.limits,
+            least_inverse_alpha,
+            remainder,
+            desired,
+            f_exact,
+            w_prev,
+            w,
+            v,
+        ) {
+            inverse.feed(w);
+            return guard.emit_classified(v, false, || true);
+        }
+        // Otherwise the walks, from the counts of the memory as it is. Beyond reach from this
+        // state: the exact solution is the limit in the direction of travel; emitted at once
+        // and counted, as the exact IHC does.
+        inverse.recount();
+        let reach = inverse.solve(&ReachOnly(&exact), f_exact, guard.limits);
+        if reach.saturated {
+            let v = inverse.feed_solved(&reach);
+            return guard.emit(v, true);
+        }
         let solution = inverse.solve(&Eq5Delayed { w }, w_prev - w, guard.limits);
         let v = inverse.feed_solved(&solution);
         // y_d is reachable: a clamp here (rounding only, by the proof) is the loop's.
@@ -322,6 +384,7 @@ impl<T: Real, B: Buffer<T>> Ihc<T, B> {
             guard,
             self.mode,
             self.relaxation,
+            self.least_inverse_alpha,
             &self.input,
             desired,
         )
@@ -355,6 +418,7 @@ impl<T: Real, B: Buffer<T>> Compensator<T> for Ihc<T, B> {
                 guard,
                 self.mode,
                 self.relaxation,
+                self.least_inverse_alpha,
                 remainder,
                 desired,
             )

@@ -210,6 +210,16 @@ impl<T: Real, B: Buffer<T>> PlayBank<T, B> {
         self.a
     }
 
+    /// The least reciprocal slope over the bank's segments, `1 / max(a, a + b_1 + ... +
+    /// b_k)`: however the memory lies, moving the input from `x` to `y` moves the output by at
+    /// most `|y - x| / least_inverse_alpha`.
+    pub fn least_inverse_alpha(&self) -> T {
+        self.inverse_alpha
+            .as_ref()
+            .iter()
+            .fold(self.inverse_a, |least, &q| least.min(q))
+    }
+
     /// The last input fed.
     pub fn input(&self) -> T {
         self.input

@@ -132,6 +132,38 @@ impl<T: Real, R: LaneRemainder<T, W>, const W: usize> LaneEquation<T, W> for Eq5
     }
 }
 
+/// The guarded loop's reach test (`crate::ihc::guarded_reach` lane by lane).
+struct GuardedReach<T, const W: usize> {
+    min: L<T, W>,
+    max: L<T, W>,
+    least_inverse_alpha: L<T, W>,
+}
+
+impl<T: Real, const W: usize> GuardedReach<T, W> {
+    /// The lanes whose step to `w`, with `v = P1^{-1}[w]`, proves `y_d` within reach.
+    #[allow(clippy::too_many_arguments)]
+    #[inline(always)]
+    fn proves<R: LaneRemainder<T, W>>(
+        &self,
+        remainder: R,
+        desired: L<T, W>,
+        f_exact: L<T, W>,
+        w_prev: L<T, W>,
+        w: L<T, W>,
+        v: L<T, W>,
+    ) -> Mask<T, W> {
+        let zero = Lanes::zero();
+        let (min, max, least) = (self.min, self.max, self.least_inverse_alpha);
+        let inside = v.ge(min) & v.le(max);
+        let f_w = w + remainder.value(v) - desired;
+        let up = w + least * (max - v) + remainder.value(max) - desired;
+        let down = w - least * (v - min) + remainder.value(min) - desired;
+        let rises = w.ge(w_prev) & (f_w.ge(zero) | up.ge(zero));
+        let falls = w.le(w_prev) & (f_w.le(zero) | down.le(zero));
+        inside & Mask::choose(f_exact.le(zero), rises, falls)
+    }
+}
+
 /// `crate::walk::rounding_tolerance` lane by lane: `256 eps (1 + terms)`.
 #[inline(always)]
 pub(crate) fn rounding_tolerance<T: Real, const W: usize>(terms: L<T, W>) -> L<T, W> {
@@ -221,34 +253,66 @@ impl PlantKernel<IhcMethod> {
             let v = feed_solved(block, rows, &mut state, &solution, active, self.uniform);
             guard.emit(v, solution.saturated, active)
         } else if MODE == GUARDED {
-            // Beyond reach: the exact solution's limit at once, counted (`crate::ihc::ihc_step`).
-            let reach = solve(
-                block,
-                rows,
-                &state,
-                &ReachOnly(&exact),
-                f_exact,
-                guard.min,
-                guard.max,
-                active,
-            );
-            let beyond = reach.saturated & active;
             // w(t - Ts) + mu (y_d - w(t - Ts) - h(v(t - Ts))); with mu = 1, y_d - h(v(t - Ts)).
             let w = guarded_target(block, rows, w_prev, f_exact, desired, h_prev);
-            let stepping = active.and_not(beyond);
-            let step = solve(
+            // v = P1^{-1}[w] evaluated directly, kept where it proves y_d within reach
+            // (`crate::ihc::guarded_reach`).
+            let sum = memory_sum_at(block, rows, state.operators, w, self.uniform);
+            let direct = state.a * w + sum;
+            let least = block.get(rows.scalar(PlantRows::LEAST_INVERSE_ALPHA));
+            let reach = GuardedReach {
+                min: guard.min,
+                max: guard.max,
+                least_inverse_alpha: least,
+            };
+            let settled = active & reach.proves(remainder, desired, f_exact, w_prev, w, direct);
+            let walking = active.and_not(settled);
+            let mut v = direct;
+            let mut limited = Mask::splat(false);
+            let mut beyond = Mask::splat(false);
+            if walking.any() {
+                // The walks, from the counts of the memory as it is. Beyond reach: the exact
+                // solution's limit at once, counted (`crate::ihc::ihc_step`).
+                recount(block, rows, &mut state);
+                let reach = solve(
+                    block,
+                    rows,
+                    &state,
+                    &ReachOnly(&exact),
+                    f_exact,
+                    guard.min,
+                    guard.max,
+                    walking,
+                );
+                beyond = reach.saturated & walking;
+                let stepping = walking.and_not(beyond);
+                let step = solve(
+                    block,
+                    rows,
+                    &state,
+                    &Eq5Delayed { w },
+                    w_prev - w,
+                    guard.min,
+                    guard.max,
+                    stepping,
+                );
+                let solution = reach.select(beyond, step);
+                let fed = feed_solved(block, rows, &mut state, &solution, walking, self.uniform);
+                v = fed.or_keep(walking, v);
+                limited = (solution.saturated | beyond) & walking;
+            }
+            // The memory of the settled lanes, and its sum (counts left unused).
+            update_memory_with::<_, _, false, false>(
                 block,
-                rows,
-                &state,
-                &Eq5Delayed { w },
-                w_prev - w,
-                guard.min,
-                guard.max,
-                stepping,
+                rows.operators(),
+                state.operators,
+                w,
+                settled,
+                self.uniform,
             );
-            let solution = reach.select(beyond, step);
-            let v = feed_solved(block, rows, &mut state, &solution, active, self.uniform);
-            let (out, clamped) = guard.clamp(v, solution.saturated | beyond);
+            state.input = w.or_keep(settled, state.input);
+            state.memory_sum = sum.or_keep(settled, state.memory_sum);
+            let (out, clamped) = guard.clamp(v, limited);
             guard.record(out, clamped, !beyond, active)
         } else {
             // w(t) = y_d(t) - h(v(t - Ts)), and v(t) = P1^{-1}[w](t) evaluated directly

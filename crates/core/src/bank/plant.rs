@@ -137,6 +137,7 @@ pub(crate) fn write_lane<T: Real, S: BankStorage<T, W>, B: Buffer<T>, const W: u
         (PlantRows::LIMIT_MIN, guard.limits.min()),
         (PlantRows::LIMIT_MAX, guard.limits.max()),
         (PlantRows::PREVIOUS, guard.previous),
+        (PlantRows::LEAST_INVERSE_ALPHA, bank.least_inverse_alpha()),
     ];
     for (which, value) in scalars {
         blocks.set_value(lane, rows.scalar(which), value);

@@ -192,7 +192,9 @@ impl PlantRows {
     pub const LIMIT_MIN: usize = 5;
     pub const LIMIT_MAX: usize = 6;
     pub const PREVIOUS: usize = 7;
-    const SCALARS: usize = 8;
+    /// `crate::walk::PlayBank::least_inverse_alpha` (the guarded IHC's reach bound).
+    pub const LEAST_INVERSE_ALPHA: usize = 8;
+    const SCALARS: usize = 9;
     /// The rows every block holds before its operator tables: the scalars and the paper's
     /// three coefficients.
     pub const HEAD: usize = Self::SCALARS + PLAIN_DEGREE;
