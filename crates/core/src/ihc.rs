@@ -47,8 +47,9 @@ use crate::{
 ///   (`P1[P1^{-1}[w]] = w`, ERRATA item 3), so `e` is the model's tracking error, and `q_max`
 ///   is the largest signed gain `(g'(x) - a2) / (a2 + b_1 + ... + b_k)` over the reachable
 ///   branches. With `mu = 1` a reachable sample is the plain delayed loop's, bit for bit when
-///   both evaluate `P1^{-1}[w]` directly, otherwise to rounding (a few ulp: the walk ends on a
-///   segment and evaluates it there).
+///   both evaluate `P1^{-1}[w]` directly; where the guarded loop walks (near the limits, where
+///   its reach bound fails) and shortly after, to a few ulp (the walk ends on a segment and
+///   evaluates it there).
 ///
 ///   *Proof sketch.* While `y_d` holds, moving `w` from `w(t - Ts)` to `w(t)` moves `v` along
 ///   `P1^{-1}` and the model's output by `integral (1 + q(k, v)) dw` over the move, where each

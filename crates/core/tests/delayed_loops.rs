@@ -440,8 +440,8 @@ fn guarded_loops_never_ring() {
     );
 }
 
-/// The guarded IHC is the plain delayed loop, to a few ulp (the plain loop evaluates the
-/// inverse PI part directly, the guarded one on its walk's segment), on reachable positions
+/// The guarded IHC is the plain delayed loop, bit for bit where both evaluate the inverse PI
+/// part directly and to a few ulp after the guarded one walks (near the limits), on reachable positions
 /// where its relaxation is 1 (the paper's Table 1: `a1 < 0`, the delayed IHC already approaches
 /// monotonically). Table 1's plain delayed WIHC (gain 1.66) rings from rest; the guarded WIHC
 /// delays only the cubic, so its relaxation is the IHC's (1), it neither rings nor clamps, and
@@ -460,6 +460,7 @@ fn table1_guarded_loops() {
     );
     let mut rng = rng(17);
     let mut generator = plant.clone();
+    let mut same_bits = 0;
     for v in random_input(&mut rng, 3000, 0.0, 1.0) {
         let y = generator.step(v);
         let (a, b) = (plain.step(y), guarded.step(y));
@@ -467,7 +468,11 @@ fn table1_guarded_loops() {
             (a - b).abs() <= 16.0 * f64::EPSILON * a.abs().max(1.0),
             "plain {a} guarded {b} at y_d {y}"
         );
+        same_bits += usize::from(a == b);
     }
+    // Both evaluate P1^{-1}[w] directly except where the guarded loop cannot prove y_d within
+    // reach (near the limits) and walks: 2 852 of the 3 000 samples here.
+    assert!(same_bits > 2_500, "{same_bits} of 3000 the same bits");
     let mut unchecked: VecWihc =
         Wihc::new(&plant, limits, SolveMode::DelayedAllowUnstable).unwrap();
     let mut guarded: VecWihc = Wihc::new(&plant, limits, SolveMode::DelayedGuarded).unwrap();
