@@ -33,9 +33,10 @@ use crate::{
 ///   whatever the model. Each sample first asks whether `y_d` is reachable within the limits
 ///   from the current state: at once when the relaxed step's `v = P1^{-1}[w]`, evaluated
 ///   directly, lies within the limits and eq. (5)'s residual changes sign between
-///   `w(t - Ts)` and `w` (the exact root lies between them; then that `v` is the output),
-///   otherwise by walking the inverse's segments with the exact residual, without solving on
-///   the last one (the walk alone, no root). When it is not, the
+///   `w(t - Ts)` and `w`, or cannot reach zero before `w` has moved the inverse's least
+///   reciprocal slope times the distance from `v` to the limit (then that `v` is the output;
+///   see `guarded_reach`), otherwise by walking the inverse's segments with the exact
+///   residual, without solving on the last one (the walk alone, no root). When it is not, the
 ///   exact solution is the limit in the direction of travel: the guarded loop emits it at once
 ///   (bit for bit the exact IHC's output) and counts the sample in
 ///   [`Diagnostics::saturated`]. When it is, the loop takes the under-relaxed step
@@ -56,8 +57,9 @@ use crate::{
 ///   `(k, v)` met is a reachable branch and `1 + q = (g'(v) + b_1 + ... + b_k) /
 ///   (a2 + b_1 + ... + b_k)` is the model's slope over the PI part's, positive for an
 ///   invertible model. So `e(t + Ts) = e(t) (1 - mu (1 + q_avg))` with `1 + q_avg` in
-///   `[1 + q_min, 1 + q_max]`: the factor lies in `[0, 1 - mu (1 + q_min)]`, below 1. The error keeps its sign and shrinks, and since
-///   the exact solution lies within the limits the step never reaches a limit: the model's
+///   `[1 + q_min, 1 + q_max]`: the factor lies in `[0, 1 - mu (1 + q_min)]`, below 1. The
+///   error keeps its sign and shrinks, and since the exact solution lies within the limits
+///   the step never reaches a limit: the model's
 ///   output approaches `y_d` from one side and the drive moves monotonically towards the exact
 ///   solution. An unreachable `y_d` sends the drive to the limit the exact solution sits on,
 ///   where it stays while `y_d` holds (feeding the limit again changes no memory). Either
@@ -70,9 +72,9 @@ use crate::{
 /// [`Diagnostics::loop_saturated`]; not: [`Diagnostics::saturated`]), so it costs about one
 /// exact step more; real-time budgets should use the delayed step plus the exact step. The
 /// guarded loop mostly costs the plain one's direct evaluation; a sample it cannot settle so
-/// (near a limit, or a relaxed step with `mu < 1` that stops short of the root) walks twice
-/// (the reachability walk, then the relaxed step's), never solving a root of the cubic: its
-/// worst case is one evaluation and two walks over the operators.
+/// (near a limit) recounts the moving operators and walks twice (the reachability walk, then
+/// the relaxed step's), never solving a root of the cubic: its worst case is one evaluation,
+/// a recount, two walks over the operators and one memory update.
 ///
 /// See [`Compensator`] for the output guarantees.
 #[derive(Debug, Clone)]

@@ -56,8 +56,9 @@ use crate::{
 ///   drive up to rounding). Before it, each sample learns whether `y_d` is reachable within
 ///   the limits: at once when eq. (9)'s residual at the limit in the direction of travel (the
 ///   PI part evaluated there directly, as if fed the limit) has changed sign, otherwise by
-///   walking the segments with the exact residual, without a root solve: when it is not, the exact solution is the limit in the direction of travel, emitted at
-///   once (bit for bit the exact WIHC's output) and counted in [`Diagnostics::saturated`].
+///   walking the segments with the exact residual, without a root solve: when it is not,
+///   the exact solution is the limit in the direction of travel, emitted at once (bit for
+///   bit the exact WIHC's output) and counted in [`Diagnostics::saturated`].
 ///
 ///   *Proof sketch.* While `y_d` holds, moving `P1` from `P1_{t - Ts}` to `z(t)` along the
 ///   walk moves the drive monotonically and the model's output `h(v) + P1` by

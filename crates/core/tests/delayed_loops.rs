@@ -441,9 +441,9 @@ fn guarded_loops_never_ring() {
 }
 
 /// The guarded IHC is the plain delayed loop, bit for bit where both evaluate the inverse PI
-/// part directly and to a few ulp after the guarded one walks (near the limits), on reachable positions
-/// where its relaxation is 1 (the paper's Table 1: `a1 < 0`, the delayed IHC already approaches
-/// monotonically). Table 1's plain delayed WIHC (gain 1.66) rings from rest; the guarded WIHC
+/// part directly and to a few ulp after the guarded one walks (near the limits), on reachable
+/// positions where its relaxation is 1 (the paper's Table 1: `a1 < 0`, the delayed IHC already
+/// approaches monotonically). Table 1's plain delayed WIHC (gain 1.66) rings from rest; the guarded WIHC
 /// delays only the cubic, so its relaxation is the IHC's (1), it neither rings nor clamps, and
 /// its drive is the guarded IHC's to rounding.
 #[test]
@@ -502,8 +502,9 @@ fn table1_guarded_loops() {
 /// `[0, 1 - mu (1 + q_min)]` (the proof sketch of `Ihc` and `Wihc`), with `mu` the reported
 /// relaxation and `q_min` the smallest signed gain `(g'(x) - a2) / (a2 + b_1 + ... + b_k)` over
 /// a dense grid of the reachable branches; and an unreachable one is met at the limit at once
-/// and counted as saturated, a reachable one never counted so. Random invertible models with 1 to 100 operators, cubic and
-/// higher degrees, half of them with a relaxation below 1 (a1 > 0).
+/// and counted as saturated, a reachable one never counted so. Random invertible models with
+/// 1 to 100 operators, cubic and higher degrees, half of them with a relaxation below 1
+/// (a1 > 0).
 #[test]
 fn guarded_loops_contract_within_their_bound() {
     let mut rng = rng(23);
