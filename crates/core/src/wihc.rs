@@ -53,12 +53,10 @@ use crate::{
 ///   model's tracking error for the previous drive, and `q_max` the largest signed gain
 ///   `(g'(x) - a2) / (a2 + b_1 + ... + b_k)` over the reachable branches: the guarded IHC's law
 ///   ([`crate::Ihc`]), walked on the plant's PI part instead of eq. (7)'s inverse (the same
-///   drive up to rounding). Before it, each sample learns whether `y_d` is reachable within
-///   the limits: at once when eq. (9)'s residual at the limit in the direction of travel (the
-///   PI part evaluated there directly, as if fed the limit) has changed sign, otherwise by
-///   walking the segments with the exact residual, without a root solve: when it is not,
-///   the exact solution is the limit in the direction of travel, emitted at once (bit for
-///   bit the exact WIHC's output) and counted in [`Diagnostics::saturated`].
+///   drive up to rounding). Before it, each sample walks the segments with the exact residual
+///   of eq. (9), without a root solve, to learn whether `y_d` is reachable within the limits:
+///   when it is not, the exact solution is the limit in the direction of travel, emitted at
+///   once (bit for bit the exact WIHC's output) and counted in [`Diagnostics::saturated`].
 ///
 ///   *Proof sketch.* While `y_d` holds, moving `P1` from `P1_{t - Ts}` to `z(t)` along the
 ///   walk moves the drive monotonically and the model's output `h(v) + P1` by
@@ -84,9 +82,8 @@ use crate::{
 /// not: [`Diagnostics::saturated`]), so it costs about one exact step more. The worst case
 /// per sample is the delayed step plus the exact step; real-time budgets should use that bound
 /// (the unchecked loop can clamp on many consecutive samples while it rings). The guarded loop
-/// evaluates the PI part at a limit and walks once every sample (the step), twice when that
-/// evaluation leaves reachability open (near a limit), and never solves a root of the cubic:
-/// its worst case is one evaluation, two walks over the operators and one memory update.
+/// walks twice every sample (reachability, then the step) and never solves a root of the
+/// cubic: its worst case is two walks over the operators and one memory update.
 ///
 /// See [`Compensator`] for the output guarantees.
 #[derive(Debug, Clone)]
@@ -337,27 +334,9 @@ fn wihc_step<T: Real, B: Buffer<T>, R: Remainder<T>>(
         // The model's output for the previous drive minus y_d: -e(t).
         let f_prev = h_prev + p1_prev - desired;
         // Beyond reach from this state: the exact solution is the limit in the direction of
-        // travel; emitted at once and counted, as the exact WIHC does. Eq. (9)'s residual at
-        // the limit, the plant's PI part evaluated there directly, settles most samples (within
-        // reach when its sign has changed); the others walk to learn it.
-        let rising = f_prev <= T::zero();
-        let v_limit = if rising {
-            guard.limits.max()
-        } else {
-            guard.limits.min()
-        };
-        let at_limit = remainder.value(v_limit) + bank.output_at(v_limit) - desired;
-        let within = if rising {
-            at_limit >= T::zero()
-        } else {
-            at_limit <= T::zero()
-        };
-        let reach = if within {
-            None
-        } else {
-            Some(bank.solve(&ReachOnly(&equation), f_prev, guard.limits))
-        };
-        let s = if let Some(reach) = reach.filter(|r| r.saturated) {
+        // travel; emitted at once and counted, as the exact WIHC does.
+        let reach = bank.solve(&ReachOnly(&equation), f_prev, guard.limits);
+        let s = if reach.saturated {
             reach
         } else {
             // P1 = z(t) = P1(t - Ts) + mu e(t); with mu = 1, y_d - h(v(t - Ts)).
@@ -369,7 +348,7 @@ fn wihc_step<T: Real, B: Buffer<T>, R: Remainder<T>>(
             bank.solve(&BankOutput { target }, p1_prev - target, guard.limits)
         };
         // A clamp of a reachable y_d (rounding only, by the proof) is the loop's.
-        let reachable = !reach.is_some_and(|r| r.saturated);
+        let reachable = !reach.saturated;
         let v = guard.emit_classified(s.input, s.saturated, || reachable);
         if v == s.input {
             bank.feed_solved(&s);

@@ -9,8 +9,8 @@ use super::plant::{
     write_lane,
 };
 use super::play::{
-    LaneEquation, LaneSolution, PlayState, ReachOnly, feed, feed_solved_or_full, memory_sum_at,
-    recount, solve, update_memory_with,
+    LaneEquation, LaneSolution, PlayState, ReachOnly, feed, feed_solved_or_full, recount, solve,
+    update_memory_with,
 };
 use super::root::{LaneRemainder, increasing_root};
 use super::run::{BankKernel, BlockKernel, run};
@@ -198,32 +198,18 @@ impl PlantKernel<WihcMethod> {
                 let h_prev = remainder.value(v_prev);
                 let p1_prev = state.output();
                 let f_prev = h_prev + p1_prev - desired;
-                // Within reach where eq. (9)'s residual at the limit, evaluated directly, has
-                // changed sign; the other lanes walk to learn it.
-                let zero = Lanes::zero();
-                let rising = f_prev.le(zero);
-                let v_limit = guard.max.or_keep(rising, guard.min);
-                let sum = memory_sum_at(block, rows, state.operators, v_limit, self.uniform);
-                let at_limit = remainder.value(v_limit) + (state.a * v_limit + sum) - desired;
-                let within = Mask::choose(rising, at_limit.ge(zero), at_limit.le(zero));
-                let unsure = active.and_not(within);
+                let reach = solve(
+                    block,
+                    rows,
+                    &state,
+                    &ReachOnly(&equation),
+                    f_prev,
+                    guard.min,
+                    guard.max,
+                    active,
+                );
+                let beyond = reach.saturated & active;
                 let target = guarded_target(block, rows, p1_prev, f_prev, desired, h_prev);
-                let mut beyond = Mask::splat(false);
-                let mut reach = None;
-                if unsure.any() {
-                    let r = solve(
-                        block,
-                        rows,
-                        &state,
-                        &ReachOnly(&equation),
-                        f_prev,
-                        guard.min,
-                        guard.max,
-                        unsure,
-                    );
-                    beyond = r.saturated & unsure;
-                    reach = Some(r);
-                }
                 let stepping = active.and_not(beyond);
                 let step = solve(
                     block,
@@ -235,10 +221,7 @@ impl PlantKernel<WihcMethod> {
                     guard.max,
                     stepping,
                 );
-                let s = match reach {
-                    Some(r) => r.select(beyond, step),
-                    None => step,
-                };
+                let s = reach.select(beyond, step);
                 let (out, clamped) = guard.clamp(s.input, s.saturated | beyond);
                 (s, guard.record(out, clamped, !beyond, active))
             };
