@@ -20,7 +20,10 @@ use crate::{
 ///   gives `P[v](t) = y_d(t)`.
 /// - [`SolveMode::Delayed`]: `w(t) = y_d(t) - h(v(t - Ts))`, as real-time implementations do,
 ///   and `v(t) = P1^{-1}[w](t)` evaluated directly (the inverse's operators fed `w`, eq. (7));
-///   only a `v` beyond the limits walks the inverse's segments to stop at the limit.
+///   only a `v` beyond the limits walks the inverse's segments to stop at the limit. With more
+///   than [`DIRECT_OPERATORS`] (16) operators every sample walks instead (cheaper there: the
+///   walk crosses a segment or two, the evaluation passes over every operator), the same
+///   drive to rounding.
 ///   While `y_d` holds, successive `w` differ by at most [`Ihc::delayed_loop_gain`] times the
 ///   previous difference (`|g'(x) - a2| / (a2 + b_1 + ... + b_k)` over the reachable branches,
 ///   see [`Mpim::delayed_ihc_loop_gain`]): below 1 the loop settles after any jump in `y_d`;
@@ -262,6 +265,22 @@ impl<T: Real> SegmentEquation<T> for ReachControl<T> {
     }
 }
 
+/// The most operators for which the delayed and guarded IHC evaluate `P1^{-1}[w]` directly:
+/// a pass over every operator, and another to feed them, against a walk over the segments the
+/// sample crosses (usually one or two). One `Ihc` on the criterion bench's trajectory (per
+/// trajectory, the two ways taking turns, 2026-11-28): the guarded loop f64 269 -> 223 us with
+/// 10 operators, 403 -> 1 108 us with 100 (f32 265 -> 252, 346 -> 1 276): the two cross near
+/// 11-16 operators. A bank evaluates a channel directly by the same rule, so that each channel
+/// stays its single compensator's twin bit for bit.
+pub const DIRECT_OPERATORS: usize = 16;
+
+/// Whether the delayed and guarded loops evaluate this inverse directly
+/// ([`DIRECT_OPERATORS`]).
+#[inline(always)]
+fn evaluates_directly<T: Real, B: Buffer<T>>(inverse: &PlayBank<T, B>) -> bool {
+    inverse.thresholds().len() <= DIRECT_OPERATORS
+}
+
 /// Whether the guarded loop's step to `w`, whose `v = P1^{-1}[w]` was evaluated directly,
 /// proves `y_d` reachable within the limits, so that `v` is the step's output without a walk.
 ///
@@ -329,24 +348,26 @@ fn ihc_step<T: Real, B: Buffer<T>, R: Remainder<T>>(
         } else {
             desired - h_prev
         };
-        let v = inverse.output_at(w);
-        if guarded_reach(
-            guard.limits,
-            least_inverse_alpha,
-            remainder,
-            desired,
-            f_exact,
-            w_prev,
-            w,
-            v,
-        ) {
-            inverse.feed(w);
-            return guard.emit_classified(v, false, || true);
+        if evaluates_directly(inverse) {
+            let v = inverse.output_at(w);
+            if guarded_reach(
+                guard.limits,
+                least_inverse_alpha,
+                remainder,
+                desired,
+                f_exact,
+                w_prev,
+                w,
+                v,
+            ) {
+                inverse.feed(w);
+                return guard.emit_classified(v, false, || true);
+            }
+            // Otherwise the walks, from the counts of the memory as it is.
+            inverse.recount();
         }
-        // Otherwise the walks, from the counts of the memory as it is. Beyond reach from this
-        // state: the exact solution is the limit in the direction of travel; emitted at once
-        // and counted, as the exact IHC does.
-        inverse.recount();
+        // Beyond reach from this state: the exact solution is the limit in the direction of
+        // travel; emitted at once and counted, as the exact IHC does.
         let reach = inverse.solve(&ReachOnly(&exact), f_exact, guard.limits);
         if reach.saturated {
             let v = inverse.feed_solved(&reach);
@@ -360,14 +381,17 @@ fn ihc_step<T: Real, B: Buffer<T>, R: Remainder<T>>(
     // Eq. (5) with the loop broken: w(t) = y_d(t) - h(v(t - Ts)), and v(t) = P1^{-1}[w](t)
     // evaluated directly, the inverse PI part's operators fed w.
     let w = desired - h_prev;
-    let v = inverse.output_at(w);
-    if v >= guard.limits.min() && v <= guard.limits.max() {
-        inverse.feed(w);
-        return guard.emit_classified(v, false, || false);
+    if evaluates_directly(inverse) {
+        let v = inverse.output_at(w);
+        if v >= guard.limits.min() && v <= guard.limits.max() {
+            inverse.feed(w);
+            return guard.emit_classified(v, false, || false);
+        }
+        // Beyond the limits (or not finite): the walk towards w, from the counts of the memory
+        // as it is (the direct evaluations above leave them unused).
+        inverse.recount();
     }
-    // Beyond the limits (or not finite): the walk towards w, stopped at the limit, from the
-    // counts of the memory as it is (the direct evaluations above leave them unused).
-    inverse.recount();
+    // The walk towards w, stopped at a limit.
     let solution = inverse.solve(&Eq5Delayed { w }, w_prev - w, guard.limits);
     // A clamped sample: was y_d reachable within the limits? The exact solve from the same
     // state says; it only runs when the delayed loop hit a limit.

@@ -83,7 +83,7 @@ pub use compensator::{Compensator, Diagnostics, OutputLimits, SolveMode};
 pub use creep::{Creep, CreepInverse, MAX_CREEP_ELEMENTS};
 pub use dihc::Dihc;
 pub use error::CoreError;
-pub use ihc::Ihc;
+pub use ihc::{DIRECT_OPERATORS, Ihc};
 pub use invertibility::{BranchSlope, LoopGain, branch_checkpoints, branch_intervals};
 pub use mpim::Mpim;
 pub use output_map::{MAX_OUTPUT_MAP_DEGREE, MapSide, MappedCompensator, OutputMap};

@@ -27,11 +27,13 @@ fn convert<T: Real>(model: &VecMpim) -> Option<Mpim<T, Vec<T>>> {
 fn random_models(rng: &mut impl Rng, channels: usize) -> Vec<VecMpim> {
     let mixed = rng.random::<bool>();
     let polynomials = rng.random::<f64>() < 0.3;
-    let shared_n = 1 + (rng.random::<u32>() as usize) % 14;
+    // Up to 24 operators: both sides of `DIRECT_OPERATORS` (16), where the delayed and guarded
+    // IHC switch from the direct evaluation to the walk.
+    let shared_n = 1 + (rng.random::<u32>() as usize) % 24;
     (0..channels)
         .map(|_| {
             let n = if mixed {
-                1 + (rng.random::<u32>() as usize) % 14
+                1 + (rng.random::<u32>() as usize) % 24
             } else {
                 shared_n
             };

@@ -132,6 +132,15 @@ impl<T: Real, R: LaneRemainder<T, W>, const W: usize> LaneEquation<T, W> for Eq5
     }
 }
 
+/// The lanes whose delayed and guarded loops evaluate `P1^{-1}[w]` directly: those of at most
+/// [`crate::DIRECT_OPERATORS`] operators, as their single compensators do.
+#[inline(always)]
+fn evaluate_directly<T: Real, const W: usize>(state: &PlayState<T, W>) -> Mask<T, W> {
+    state
+        .operators
+        .test(|n| n as usize <= crate::DIRECT_OPERATORS)
+}
+
 /// The guarded loop's reach test (`crate::ihc::guarded_reach` lane by lane).
 struct GuardedReach<T, const W: usize> {
     min: L<T, W>,
@@ -255,25 +264,32 @@ impl PlantKernel<IhcMethod> {
         } else if MODE == GUARDED {
             // w(t - Ts) + mu (y_d - w(t - Ts) - h(v(t - Ts))); with mu = 1, y_d - h(v(t - Ts)).
             let w = guarded_target(block, rows, w_prev, f_exact, desired, h_prev);
-            // v = P1^{-1}[w] evaluated directly, kept where it proves y_d within reach
-            // (`crate::ihc::guarded_reach`).
-            let sum = memory_sum_at(block, rows, state.operators, w, self.uniform);
-            let direct = state.a * w + sum;
-            let least = block.get(rows.scalar(PlantRows::LEAST_INVERSE_ALPHA));
-            let reach = GuardedReach {
-                min: guard.min,
-                max: guard.max,
-                least_inverse_alpha: least,
-            };
-            let settled = active & reach.proves(remainder, desired, f_exact, w_prev, w, direct);
+            // v = P1^{-1}[w] evaluated directly in the lanes of few operators, kept where it
+            // proves y_d within reach (`crate::ihc::guarded_reach`).
+            let direct_lanes = active & evaluate_directly(&state);
+            let (mut settled, mut sum, mut v) = (Mask::splat(false), Lanes::zero(), Lanes::zero());
+            if direct_lanes.any() {
+                sum = memory_sum_at(block, rows, state.operators, w, self.uniform);
+                v = state.a * w + sum;
+                let least = block.get(rows.scalar(PlantRows::LEAST_INVERSE_ALPHA));
+                let reach = GuardedReach {
+                    min: guard.min,
+                    max: guard.max,
+                    least_inverse_alpha: least,
+                };
+                settled = direct_lanes & reach.proves(remainder, desired, f_exact, w_prev, w, v);
+            }
             let walking = active.and_not(settled);
-            let mut v = direct;
             let mut limited = Mask::splat(false);
             let mut beyond = Mask::splat(false);
             if walking.any() {
-                // The walks, from the counts of the memory as it is. Beyond reach: the exact
-                // solution's limit at once, counted (`crate::ihc::ihc_step`).
-                recount(block, rows, &mut state);
+                // The walks, from the counts of the memory as it is (recounted where direct
+                // evaluations left them unused). Beyond reach: the exact solution's limit at
+                // once, counted (`crate::ihc::ihc_step`).
+                let stale = walking & direct_lanes;
+                if stale.any() {
+                    recount(block, rows, &mut state, stale);
+                }
                 let reach = solve(
                     block,
                     rows,
@@ -302,33 +318,42 @@ impl PlantKernel<IhcMethod> {
                 limited = (solution.saturated | beyond) & walking;
             }
             // The memory of the settled lanes, and its sum (counts left unused).
-            update_memory_with::<_, _, false, false>(
-                block,
-                rows.operators(),
-                state.operators,
-                w,
-                settled,
-                self.uniform,
-            );
-            state.input = w.or_keep(settled, state.input);
-            state.memory_sum = sum.or_keep(settled, state.memory_sum);
+            if settled.any() {
+                update_memory_with::<_, _, false, false>(
+                    block,
+                    rows.operators(),
+                    state.operators,
+                    w,
+                    settled,
+                    self.uniform,
+                );
+                state.input = w.or_keep(settled, state.input);
+                state.memory_sum = sum.or_keep(settled, state.memory_sum);
+            }
             let (out, clamped) = guard.clamp(v, limited);
             guard.record(out, clamped, !beyond, active)
         } else {
             // w(t) = y_d(t) - h(v(t - Ts)), and v(t) = P1^{-1}[w](t) evaluated directly
             // (`crate::ihc::ihc_step`): the operators' sum at w, the memory fed only after.
             let w = desired - h_prev;
-            let sum = memory_sum_at(block, rows, state.operators, w, self.uniform);
-            let direct = state.a * w + sum;
-            let inside = active & direct.ge(guard.min) & direct.le(guard.max);
-            // Beyond the limits (or not finite): the walk towards w, stopped at the limit, from
-            // the counts of the memory as it is.
+            let direct_lanes = active & evaluate_directly(&state);
+            let (mut inside, mut sum, mut v) = (Mask::splat(false), Lanes::zero(), Lanes::zero());
+            if direct_lanes.any() {
+                sum = memory_sum_at(block, rows, state.operators, w, self.uniform);
+                v = state.a * w + sum;
+                inside = direct_lanes & v.ge(guard.min) & v.le(guard.max);
+            }
+            // Many operators, or beyond the limits (or not finite): the walk towards w,
+            // stopped at a limit, from the counts of the memory as it is (recounted where
+            // direct evaluations left them unused).
             let walking = active.and_not(inside);
-            let mut v = direct;
             let mut saturated = Mask::splat(false);
             let mut reachable = Mask::splat(false);
             if walking.any() {
-                recount(block, rows, &mut state);
+                let stale = walking & direct_lanes;
+                if stale.any() {
+                    recount(block, rows, &mut state, stale);
+                }
                 let solution = solve(
                     block,
                     rows,
@@ -353,16 +378,18 @@ impl PlantKernel<IhcMethod> {
                 saturated = solution.saturated & walking;
             }
             // The memory of the lanes evaluated directly, and its sum (counts left unused).
-            update_memory_with::<_, _, false, false>(
-                block,
-                rows.operators(),
-                state.operators,
-                w,
-                inside,
-                self.uniform,
-            );
-            state.input = w.or_keep(inside, state.input);
-            state.memory_sum = sum.or_keep(inside, state.memory_sum);
+            if inside.any() {
+                update_memory_with::<_, _, false, false>(
+                    block,
+                    rows.operators(),
+                    state.operators,
+                    w,
+                    inside,
+                    self.uniform,
+                );
+                state.input = w.or_keep(inside, state.input);
+                state.memory_sum = sum.or_keep(inside, state.memory_sum);
+            }
             let (out, clamped) = guard.clamp(v, saturated);
             guard.record(out, clamped, reachable, active)
         };

@@ -679,14 +679,17 @@ pub(crate) fn reset<T: Real, const W: usize>(
 }
 
 /// The counts of operators at either edge of their band, recomputed from the memory and the
-/// last input of every lane, as [`update_memory`] counts them when it feeds that input (the
-/// same comparisons on the same values, so the same counts): for a loop that feeds without
-/// counting (the plain delayed WIHC) and walks only now and then.
+/// last input of the lanes of `lanes`, as [`update_memory`] counts them when it feeds that
+/// input (the same comparisons on the same values, so the same counts): for a loop that feeds
+/// without counting (the plain delayed WIHC, the delayed and guarded IHC's direct evaluations)
+/// and walks only now and then. The other lanes keep their counts (a walk's, which may differ
+/// from the memory's at an operator's edge by rounding).
 #[inline(always)]
 pub(crate) fn recount<T: Real, const W: usize>(
     block: &Block<'_, T, W>,
     rows: &PlantRows,
     state: &mut PlayState<T, W>,
+    lanes: Mask<T, W>,
 ) {
     let x = state.input;
     let mut rising = Lanes::splat(0u32);
@@ -699,6 +702,6 @@ pub(crate) fn recount<T: Real, const W: usize>(
         rising = rising + (w.le(lower) & inside).count32();
         falling = falling + (w.ge(x) & inside).count32();
     }
-    state.rising = rising;
-    state.falling = falling;
+    state.rising = rising.or_keep(lanes, state.rising);
+    state.falling = falling.or_keep(lanes, state.falling);
 }

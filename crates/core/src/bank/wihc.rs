@@ -243,7 +243,7 @@ impl PlantKernel<WihcMethod> {
             if check.any() {
                 // The feeds below do not count the operators at the edges: the walk's counts
                 // from the memory (the same as a counting feed leaves).
-                recount(block, rows, &mut state);
+                recount(block, rows, &mut state, check);
                 let f_prev = remainder.value(v_prev) + state.output() - desired;
                 let s = solve(
                     block, rows, &state, &equation, f_prev, guard.min, guard.max, check,
