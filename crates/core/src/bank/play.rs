@@ -354,12 +354,12 @@ pub(crate) fn update_memory_with<T: Real, const W: usize, const EDGES: bool, con
 #[inline(always)]
 pub(crate) fn memory_sum_at<T: Real, const W: usize>(
     block: &mut Block<'_, T, W>,
-    rows: &PlantRows,
+    tables: OperatorTables,
     operators: U<W>,
     x: L<T, W>,
     uniform: bool,
 ) -> L<T, W> {
-    let Some(operator_rows) = OperatorRows::of(block, rows.operators()) else {
+    let Some(operator_rows) = OperatorRows::of(block, tables) else {
         return Lanes::zero();
     };
     let all = Mask::splat(true);
