@@ -35,7 +35,7 @@ use crate::{
 /// - [`SolveMode::DelayedGuarded`]: an under-relaxed delayed loop that cannot oscillate,
 ///   whatever the model. Each sample first asks whether `y_d` is reachable within the limits
 ///   from the current state: at once when the relaxed step's `v = P1^{-1}[w]`, evaluated
-///   directly, lies within the limits and eq. (5)'s residual changes sign between
+///   directly (with at most [`DIRECT_OPERATORS`] operators), lies within the limits and eq. (5)'s residual changes sign between
 ///   `w(t - Ts)` and `w`, or cannot reach zero before `w` has moved the inverse's least
 ///   reciprocal slope times the distance from `v` to the limit (then that `v` is the output;
 ///   see `guarded_reach`), otherwise by walking the inverse's segments with the exact
