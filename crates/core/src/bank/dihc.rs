@@ -3,7 +3,7 @@
 use super::channels::{Channels, compensator_bank};
 use super::guard::GuardLanes;
 use super::lanes::Lanes;
-use super::plant::{all_odd_cubic, channel_lanes, cubic_lanes, polynomial_lanes, write_counters};
+use super::plant::{channel_lanes, with_remainder, write_counters};
 use super::play::update_memory_with;
 use super::root::LaneRemainder;
 use super::run::{BankKernel, BlockKernel, run};
@@ -195,20 +195,8 @@ impl<T: Real, const W: usize> BlockKernel<T, W> for DihcKernel {
 
     #[inline(always)]
     fn step(&self, block: &mut Block<'_, T, W>, desired: L<T, W>) -> L<T, W> {
-        let first = self.rows.coefficient(0);
-        if self.cubic || all_odd_cubic(block, InverseRows::ODD_CUBIC) {
-            let remainder = cubic_lanes(block, first);
-            self.step_with(block, desired, remainder)
-        } else {
-            let remainder = polynomial_lanes(
-                block,
-                first,
-                self.rows.degree,
-                InverseRows::DEGREE,
-                InverseRows::ODD_CUBIC,
-            );
-            self.step_with(block, desired, remainder)
-        }
+        with_remainder!(self, block, InverseRows, |remainder| self
+            .step_with(block, desired, remainder))
     }
 }
 

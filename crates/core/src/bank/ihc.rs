@@ -3,10 +3,7 @@
 use super::channels::{Channels, compensator_bank};
 use super::guard::GuardLanes;
 use super::lanes::{Lanes, Mask};
-use super::plant::{
-    PlantKernel, all_odd_cubic, cubic_lanes, guarded_target, plant_bank, polynomial_lanes,
-    write_lane,
-};
+use super::plant::{PlantKernel, guarded_target, plant_bank, with_remainder, write_lane};
 use super::play::{
     LaneEquation, PlayState, ReachOnly, feed, feed_solved, memory_sum_at, recount, solve,
     update_memory_with,
@@ -248,6 +245,45 @@ impl<T: Real, const W: usize> LaneEquation<T, W> for ReachControl<T, W> {
 }
 
 impl PlantKernel<IhcMethod> {
+    /// `crate::walk::PlayBank::output_at` in every lane: the operators' memory sum at `w` over
+    /// `tables` (none: 0), and `P1^{-1}[w] = a w + sum`.
+    #[inline(always)]
+    fn evaluate<T: Real, const W: usize>(
+        &self,
+        block: &mut Block<'_, T, W>,
+        tables: OperatorTables,
+        state: &PlayState<T, W>,
+        w: L<T, W>,
+    ) -> (L<T, W>, L<T, W>) {
+        let sum = memory_sum_at(block, tables, state.operators, w, self.uniform);
+        (sum, state.a * w + sum)
+    }
+
+    /// `crate::walk::PlayBank::feed` of `w` in the lanes of `lanes`, evaluated before with
+    /// [`Self::evaluate`] to `sum`: their memory, last input and memory sum (the counts left
+    /// unused, recounted before a walk).
+    #[inline(always)]
+    fn feed_evaluated<T: Real, const W: usize>(
+        &self,
+        block: &mut Block<'_, T, W>,
+        tables: OperatorTables,
+        state: &mut PlayState<T, W>,
+        w: L<T, W>,
+        sum: L<T, W>,
+        lanes: Mask<T, W>,
+    ) {
+        update_memory_with::<_, _, false, false>(
+            block,
+            tables,
+            state.operators,
+            w,
+            lanes,
+            self.uniform,
+        );
+        state.input = w.or_keep(lanes, state.input);
+        state.memory_sum = sum.or_keep(lanes, state.memory_sum);
+    }
+
     /// One sample of every lane with the remainder `h` (`crate::ihc::ihc_step`).
     #[inline(always)]
     fn step_with<T: Real, R: LaneRemainder<T, W>, const W: usize, const MODE: u8>(
@@ -283,8 +319,7 @@ impl PlantKernel<IhcMethod> {
             // proves y_d within reach (`crate::ihc::guarded_reach`).
             let direct_lanes = active & evaluate_directly(&state);
             let tables = direct_tables(rows, direct_lanes);
-            let sum = memory_sum_at(block, tables, state.operators, w, self.uniform);
-            let mut v = state.a * w + sum;
+            let (sum, mut v) = self.evaluate(block, tables, &state, w);
             let least = block.get(rows.scalar(PlantRows::LEAST_INVERSE_ALPHA));
             let reach = GuardedReach {
                 min: guard.min,
@@ -299,10 +334,7 @@ impl PlantKernel<IhcMethod> {
                 // The walks, from the counts of the memory as it is (recounted where direct
                 // evaluations left them unused). Beyond reach: the exact solution's limit at
                 // once, counted (`crate::ihc::ihc_step`).
-                let stale = walking & direct_lanes;
-                if stale.any() {
-                    recount(block, rows, &mut state, stale);
-                }
+                recount(block, rows, &mut state, walking & direct_lanes);
                 let reach = solve(
                     block,
                     rows,
@@ -331,16 +363,7 @@ impl PlantKernel<IhcMethod> {
                 limited = (solution.saturated | beyond) & walking;
             }
             // The memory of the settled lanes, and its sum (counts left unused).
-            update_memory_with::<_, _, false, false>(
-                block,
-                tables,
-                state.operators,
-                w,
-                settled,
-                self.uniform,
-            );
-            state.input = w.or_keep(settled, state.input);
-            state.memory_sum = sum.or_keep(settled, state.memory_sum);
+            self.feed_evaluated(block, tables, &mut state, w, sum, settled);
             let (out, clamped) = guard.clamp(v, limited);
             guard.record(out, clamped, !beyond, active)
         } else {
@@ -359,8 +382,7 @@ impl PlantKernel<IhcMethod> {
             };
             let (mut inside, mut sum, mut v) = (Mask::splat(false), Lanes::zero(), Lanes::zero());
             if !branch || direct_lanes.any() {
-                sum = memory_sum_at(block, tables, state.operators, w, self.uniform);
-                v = state.a * w + sum;
+                (sum, v) = self.evaluate(block, tables, &state, w);
                 inside = direct_lanes & v.ge(guard.min) & v.le(guard.max);
             }
             // Many operators, or beyond the limits (or not finite): the walk towards w,
@@ -370,10 +392,7 @@ impl PlantKernel<IhcMethod> {
             let mut saturated = Mask::splat(false);
             let mut reachable = Mask::splat(false);
             if walking.any() {
-                let stale = walking & direct_lanes;
-                if stale.any() {
-                    recount(block, rows, &mut state, stale);
-                }
+                recount(block, rows, &mut state, walking & direct_lanes);
                 let solution = solve(
                     block,
                     rows,
@@ -399,16 +418,7 @@ impl PlantKernel<IhcMethod> {
             }
             // The memory of the lanes evaluated directly, and its sum (counts left unused).
             if !branch || inside.any() {
-                update_memory_with::<_, _, false, false>(
-                    block,
-                    tables,
-                    state.operators,
-                    w,
-                    inside,
-                    self.uniform,
-                );
-                state.input = w.or_keep(inside, state.input);
-                state.memory_sum = sum.or_keep(inside, state.memory_sum);
+                self.feed_evaluated(block, tables, &mut state, w, sum, inside);
             }
             let (out, clamped) = guard.clamp(v, saturated);
             guard.record(out, clamped, reachable, active)
@@ -439,20 +449,8 @@ impl PlantKernel<IhcMethod> {
         block: &mut Block<'_, T, W>,
         desired: L<T, W>,
     ) -> L<T, W> {
-        let first = self.rows.coefficient(0);
-        if self.cubic || all_odd_cubic(block, PlantRows::ODD_CUBIC) {
-            let remainder = cubic_lanes(block, first);
-            self.step_with::<_, _, W, MODE>(block, desired, remainder)
-        } else {
-            let remainder = polynomial_lanes(
-                block,
-                first,
-                self.rows.degree,
-                PlantRows::DEGREE,
-                PlantRows::ODD_CUBIC,
-            );
-            self.step_with::<_, _, W, MODE>(block, desired, remainder)
-        }
+        with_remainder!(self, block, PlantRows, |remainder| self
+            .step_with::<_, _, W, MODE>(block, desired, remainder))
     }
 }
 

@@ -174,6 +174,30 @@ pub(crate) fn write_counters<T: Real, S: BankStorage<T, W>, const W: usize>(
     blocks.set_counter(lane, NON_FINITE, d.non_finite);
 }
 
+/// `$step` with `$remainder` bound to the block's remainder `h`: the paper's cubic when the
+/// kernel's channels all have it (`$kernel.cubic`) or this block's lanes do, else each lane's
+/// own polynomial (`$rows`: the kernel's row layout, for its degree and odd-cubic count rows).
+/// Each branch compiles `$step` for its own remainder type.
+macro_rules! with_remainder {
+    ($kernel:expr, $block:ident, $rows:ty, |$remainder:ident| $step:expr) => {{
+        let first = $kernel.rows.coefficient(0);
+        if $kernel.cubic || super::plant::all_odd_cubic($block, <$rows>::ODD_CUBIC) {
+            let $remainder = super::plant::cubic_lanes($block, first);
+            $step
+        } else {
+            let $remainder = super::plant::polynomial_lanes(
+                $block,
+                first,
+                $kernel.rows.degree,
+                <$rows>::DEGREE,
+                <$rows>::ODD_CUBIC,
+            );
+            $step
+        }
+    }};
+}
+pub(crate) use with_remainder;
+
 /// Whether every lane of the block has the paper's odd cubic.
 #[inline(always)]
 pub(crate) fn all_odd_cubic<T: Real, const W: usize>(block: &Block<'_, T, W>, row: usize) -> bool {

@@ -691,6 +691,9 @@ pub(crate) fn recount<T: Real, const W: usize>(
     state: &mut PlayState<T, W>,
     lanes: Mask<T, W>,
 ) {
+    if !lanes.any() {
+        return;
+    }
     let x = state.input;
     let mut rising = Lanes::splat(0u32);
     let mut falling = Lanes::splat(0u32);

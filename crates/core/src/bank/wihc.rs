@@ -4,10 +4,7 @@ use super::channels::{Channels, compensator_bank};
 use super::guard::GuardLanes;
 use super::ihc::rounding_tolerance;
 use super::lanes::{Lanes, Mask};
-use super::plant::{
-    PlantKernel, all_odd_cubic, cubic_lanes, guarded_target, plant_bank, polynomial_lanes,
-    write_lane,
-};
+use super::plant::{PlantKernel, guarded_target, plant_bank, with_remainder, write_lane};
 use super::play::{
     LaneEquation, LaneSolution, PlayState, ReachOnly, feed, feed_solved_or_full, recount, solve,
     update_memory_with,
@@ -277,20 +274,8 @@ impl<T: Real, const W: usize> BlockKernel<T, W> for PlantKernel<WihcMethod> {
 
     #[inline(always)]
     fn step(&self, block: &mut Block<'_, T, W>, desired: L<T, W>) -> L<T, W> {
-        let first = self.rows.coefficient(0);
-        if self.cubic || all_odd_cubic(block, PlantRows::ODD_CUBIC) {
-            let remainder = cubic_lanes(block, first);
-            self.step_with(block, desired, remainder)
-        } else {
-            let remainder = polynomial_lanes(
-                block,
-                first,
-                self.rows.degree,
-                PlantRows::DEGREE,
-                PlantRows::ODD_CUBIC,
-            );
-            self.step_with(block, desired, remainder)
-        }
+        with_remainder!(self, block, PlantRows, |remainder| self
+            .step_with(block, desired, remainder))
     }
 }
 
