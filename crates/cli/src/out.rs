@@ -3,12 +3,12 @@
 //! Every print goes through the macros here (the crate denies `println!` and `eprintln!`,
 //! which panic when the stream is gone):
 //!
-//! - [`outln!`] / [`out!`]: results on stdout; return `Result<(), CliError>`. When the reader
+//! - `outln!` / `out!`: results on stdout; return `Result<(), CliError>`. When the reader
 //!   has closed stdout (`hystcomp evaluate --json | head -1`), the rest of the output is
 //!   dropped without a message and the command goes on to its usual exit status, as other
 //!   command-line tools exit quietly on a broken pipe; any other write error is an output
 //!   error (exit code 3).
-//! - [`errln!`]: messages for people on stderr; a stderr that cannot be written is ignored
+//! - `errln!`: messages for people on stderr; a stderr that cannot be written is ignored
 //!   (there is nowhere left to say so).
 
 use std::fmt;

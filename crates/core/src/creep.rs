@@ -8,7 +8,7 @@
 //! creep", IEE Proc. Control Theory Appl. 148 (2001) 185-192, and
 //! Kuhnen & Krejci, "Compensation of complex hysteresis and creep effects in piezoelectrically
 //! actuated systems - a new Preisach modeling approach", IEEE Trans. Autom. Control 54 (2009)
-//! 537-550 (the paper's refs. [25] and [8]): creep as a linear
+//! 537-550 (the paper's refs. \[25\] and \[8\]): creep as a linear
 //! superposition of first-order (Kelvin-Voigt) elements at fixed time constants, weighted by
 //! identified coefficients. **Where it acts**: on the hysteresis output, not on the voltage,
 //! because what creeps in a stack is the displacement the domains produced (a held voltage

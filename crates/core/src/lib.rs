@@ -44,17 +44,17 @@
 #[cfg(feature = "alloc")]
 extern crate alloc;
 
-mod bank;
+pub mod bank;
 mod buffer;
-mod chain;
+pub mod chain;
 mod compensator;
-mod creep;
+pub mod creep;
 mod dihc;
 mod error;
 mod ihc;
 mod invertibility;
 mod mpim;
-mod output_map;
+pub mod output_map;
 pub mod paper;
 mod play;
 mod polynomial;
@@ -64,7 +64,7 @@ pub mod reference;
 mod roots;
 mod shown;
 mod solve;
-mod vibration;
+pub mod vibration;
 mod walk;
 mod wihc;
 

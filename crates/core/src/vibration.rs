@@ -1,7 +1,7 @@
 //! The vibration link of the chain `hysteresis -> creep -> vibration` (Croft, Shed & Devasia
 //! 2001, doi:10.1115/1.1341197): a linear, discrete-time model of the stage's dynamics with
 //! unit static gain, and its stable inverse over a preview of future samples (Leang, Zou &
-//! Devasia's inversion-based feedforward, the paper's ref. [19]).
+//! Devasia's inversion-based feedforward, the paper's ref. \[19\]).
 //!
 //! # The model
 //! `y(k) = sum_{j=0}^{m} b_j x(k - d - j) - sum_{i=1}^{n} a_i y(k - i)`, i.e.

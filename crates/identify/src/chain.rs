@@ -7,7 +7,7 @@
 //!    invertibility constraints. The creep link is written through its inverse
 //!    (`hystcomp_core::Creep`): `h = y - sum_i c_i (z_i[y] - origin)` with first-order
 //!    elements `z_i` at fixed log-spaced time constants (Kuhnen's creep operators, Kuhnen 2005;
-//!    Krejci & Kuhnen 2001 and Kuhnen & Krejci 2009, the paper's refs. [25] and [8]),
+//!    Krejci & Kuhnen 2001 and Kuhnen & Krejci 2009, the paper's refs. \[25\] and \[8\]),
 //!    so that the measured displacement obeys
 //!
 //!    `y(k) = H[v](k) + c + sum_i c_i z_i[y](k)`,

@@ -35,7 +35,7 @@ mod config;
 mod converters;
 mod creep;
 mod error;
-mod feasibility;
+pub mod feasibility;
 pub mod hysteresis;
 mod mechanics;
 mod stage;

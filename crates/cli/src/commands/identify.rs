@@ -105,7 +105,7 @@ pub struct FitArgs {
     #[arg(long, default_value_t = 3, value_name = "D")]
     pub input_degree: usize,
     /// Degree of the output map psi(y) = y - e2 y^2 - ... - eK y^K fitted jointly with the
-    /// MPIM, psi(y) = H[v] + c (Kuhnen's modified Prandtl-Ishlinskii structure: asymmetric
+    /// MPIM, psi(y(t)) = H[v(t)] + c (Kuhnen's modified Prandtl-Ishlinskii structure: asymmetric
     /// loops, inverted analytically): 1 (none, the paper's model) to 5. The fit keeps psi
     /// rising; IHC and WIHC solve for psi(y_d), DIHC maps its output back. The model file
     /// gains an output_map field. Least squares only; with creep, --creep-fit holds.
