@@ -35,12 +35,13 @@ use crate::{
 /// - [`SolveMode::DelayedGuarded`]: an under-relaxed delayed loop that cannot oscillate,
 ///   whatever the model. Each sample first asks whether `y_d` is reachable within the limits
 ///   from the current state: at once when the relaxed step's `v = P1^{-1}[w]`, evaluated
-///   directly (with at most [`DIRECT_OPERATORS`] operators), lies within the limits and eq. (5)'s residual changes sign between
-///   `w(t - Ts)` and `w`, or cannot reach zero before `w` has moved the inverse's least
-///   reciprocal slope times the distance from `v` to the limit (then that `v` is the output;
-///   see `guarded_reach`), otherwise by walking the inverse's segments with the exact
-///   residual, without solving on the last one (the walk alone, no root). When it is not, the
-///   exact solution is the limit in the direction of travel: the guarded loop emits it at once
+///   directly (with at most [`DIRECT_OPERATORS`] operators), lies within the limits and the
+///   residual of eq. (5) changes sign between `w(t - Ts)` and `w`, or cannot reach zero before
+///   `w` has moved the inverse's least reciprocal slope times the distance from `v` to the
+///   limit (then that `v` is the output; see `guarded_reach`), otherwise by walking the
+///   inverse's segments with the exact residual, without solving on the last one (the walk
+///   alone, no root). When it is not, the exact solution is the limit in the direction of
+///   travel: the guarded loop emits it at once
 ///   (bit for bit the exact IHC's output) and counts the sample in
 ///   [`Diagnostics::saturated`]. When it is, the loop takes the under-relaxed step
 ///
