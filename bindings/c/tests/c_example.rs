@@ -7,9 +7,10 @@
 //! usually fresh already: `cargo test` builds the library's every crate type); the examples are
 //! compiled into `<target>/c-examples`.
 
+use std::collections::BTreeMap;
 use std::path::PathBuf;
 use std::process::Command;
-use std::sync::OnceLock;
+use std::sync::{Mutex, OnceLock, PoisonError};
 
 use hystcomp_testkit::{available, c_static_library, run, target_dir, workspace_root};
 
@@ -20,8 +21,18 @@ fn compile_example(name: &str) -> PathBuf {
 }
 
 /// Compiles the C source `source` (relative to the workspace root) into the executable `name`
-/// in `<target>/c-examples`, as [`compile_example`].
+/// in `<target>/c-examples`, as [`compile_example`], once per test run: the tests run in
+/// parallel and several run the same program (the learner, the models program), and a second
+/// gcc writing the executable while another test runs it failed that test with "Permission
+/// denied". The lock is held while compiling, so each program is written once, before any test
+/// runs it.
 fn compile(source: &str, name: &str) -> PathBuf {
+    static BUILT: Mutex<BTreeMap<String, PathBuf>> = Mutex::new(BTreeMap::new());
+    // A test that panicked while compiling left nothing in the map: the next one compiles.
+    let mut built = BUILT.lock().unwrap_or_else(PoisonError::into_inner);
+    if let Some(program) = built.get(name) {
+        return program.clone();
+    }
     let root = workspace_root();
     let library = c_static_library();
     assert!(
@@ -49,6 +60,7 @@ fn compile(source: &str, name: &str) -> PathBuf {
             .arg(&program),
         &format!("{source} must compile without warnings against the committed header"),
     );
+    built.insert(name.to_owned(), program.clone());
     program
 }
 

@@ -31,9 +31,9 @@ use crate::Real;
 /// delayed IHC kernel 30 % slower. Both compute the same operations in the same order, the
 /// same bits: `lanewise` is checked against `from_fn` below, and the bank tests compare every
 /// channel with its single compensator in the written-out form. The same tests run on the loop
-/// form with `cargo test --release -p hystcomp-core --test bank` (all eleven passed on every
-/// vector path, AVX-512 included); CI leaves that run out, since its build alone takes 9 min on
-/// the project's 2-core machine.
+/// form with `cargo test --release -p hystcomp-core --test bank_f64 --test bank_f32` (all
+/// passed on every vector path, AVX-512 included); CI leaves that run out, since its build
+/// alone takes 9 min on the project's 2-core machine.
 #[inline(always)]
 pub(crate) fn lanewise<V, const W: usize>(f: impl FnMut(usize) -> V) -> [V; W] {
     #[cfg(debug_assertions)]
