@@ -10,7 +10,7 @@
 use std::collections::BTreeMap;
 use std::path::PathBuf;
 use std::process::Command;
-use std::sync::{Mutex, OnceLock, PoisonError};
+use std::sync::{Arc, Mutex, OnceLock, PoisonError, RwLock};
 
 use hystcomp_testkit::{available, c_static_library, run, target_dir, workspace_root};
 
@@ -20,19 +20,33 @@ fn compile_example(name: &str) -> PathBuf {
     compile(&format!("examples/c/{name}.c"), name)
 }
 
+/// The C programs, by name: each compiled once per test run ([`compile`]).
+static PROGRAMS: Mutex<BTreeMap<String, Arc<OnceLock<PathBuf>>>> = Mutex::new(BTreeMap::new());
+
+/// Read while gcc links a program against the static library, written while `make` may rebuild
+/// that library (`makefile_builds_and_runs_both_examples`).
+static LIBRARY: RwLock<()> = RwLock::new(());
+
 /// Compiles the C source `source` (relative to the workspace root) into the executable `name`
 /// in `<target>/c-examples`, as [`compile_example`], once per test run: the tests run in
 /// parallel and several run the same program (the learner, the models program), and a second
-/// gcc writing the executable while another test runs it failed that test with "Permission
-/// denied". The lock is held while compiling, so each program is written once, before any test
-/// runs it.
+/// gcc writing the executable while another test ran it failed that test with "Permission
+/// denied". A test asking for a program being compiled waits for it; different programs
+/// compile side by side.
 fn compile(source: &str, name: &str) -> PathBuf {
-    static BUILT: Mutex<BTreeMap<String, PathBuf>> = Mutex::new(BTreeMap::new());
-    // A test that panicked while compiling left nothing in the map: the next one compiles.
-    let mut built = BUILT.lock().unwrap_or_else(PoisonError::into_inner);
-    if let Some(program) = built.get(name) {
-        return program.clone();
-    }
+    let slot = Arc::clone(
+        PROGRAMS
+            .lock()
+            .unwrap_or_else(PoisonError::into_inner)
+            .entry(name.to_owned())
+            .or_default(),
+    );
+    // A test that panicked while compiling left the slot empty: the next one compiles.
+    slot.get_or_init(|| compile_now(source, name)).clone()
+}
+
+/// [`compile`]'s gcc run.
+fn compile_now(source: &str, name: &str) -> PathBuf {
     let root = workspace_root();
     let library = c_static_library();
     assert!(
@@ -42,6 +56,7 @@ fn compile(source: &str, name: &str) -> PathBuf {
     let examples = target_dir().join("c-examples");
     std::fs::create_dir_all(&examples).expect("the examples' directory can be created");
     let program = examples.join(name);
+    let _library = LIBRARY.read().unwrap_or_else(PoisonError::into_inner);
     run(
         Command::new("gcc")
             .current_dir(&root)
@@ -60,7 +75,6 @@ fn compile(source: &str, name: &str) -> PathBuf {
             .arg(&program),
         &format!("{source} must compile without warnings against the committed header"),
     );
-    built.insert(name.to_owned(), program.clone());
     program
 }
 
@@ -320,6 +334,9 @@ fn makefile_builds_and_runs_both_examples() {
     c_static_library();
     let out = target_dir().join("c-examples").join("make");
     let _ = std::fs::remove_dir_all(&out);
+    // The Makefile runs cargo, which rewrites the static library if it is not fresh: not while
+    // another test's gcc reads it.
+    let _library = LIBRARY.write().unwrap_or_else(PoisonError::into_inner);
     let output = run(
         Command::new("make")
             .args(["-C", "examples/c", "run", "PROFILE=debug"])

@@ -27,7 +27,7 @@ fprintf('plant model:   fit %.3f %% RMS of the displacement range, held out %.3f
         plant.report.fit.rms_percent, plant.report.holdout.rms_percent);
 fprintf('inverse model: fit %.3f %% RMS of the voltage range, held out %.3f %%\n', ...
         inverse.report.fit.rms_percent, inverse.report.holdout.rms_percent);
-model_file = fullfile(tempdir(), 'dbo-plant.json');
+model_file = [tempname() '-dbo-plant.json'];   % a name of its own: /tmp is shared
 hystcomp.save_model(plant, model_file);   % for `hystcomp compensate --model` or Simulink
 fprintf('plant model written to %s\n', model_file);
 

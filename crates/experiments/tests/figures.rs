@@ -210,12 +210,12 @@ fn figures_of_a_synthetic_run_are_valid_png_and_svg_showing_their_labels() {
     let fig7 = Panel::map("Hysteresis without compensation (linear gain)", true)
         .with_series("measured y", &run.desired_um, &run.uncompensated_um)
         .with_note("e_mhe = 13.0 % (100 bins)");
+    // Its time is printed, not asserted (a test build on a shared machine): speed is the
+    // benches' to measure.
     let started = Instant::now();
     let files = figures::write_panel_figure(&dir, "fig07_uncompensated", &fig7).unwrap();
     let elapsed = started.elapsed();
     eprintln!("fig07 (200 000 samples) drawn and written in {elapsed:?}");
-    // Generous for a test build on a shared machine.
-    assert!(elapsed.as_secs_f64() < 10.0, "drawing took {elapsed:?}");
     assert_eq!(files.png, dir.join("fig07_uncompensated.png"));
     assert_drawn(&files.png, figures::PANEL_FIGURE_SIZE, &[BLUE]);
     assert_svg(

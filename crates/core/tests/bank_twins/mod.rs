@@ -155,6 +155,50 @@ pub fn rows<T: Real>(per_channel: &[Vec<f64>]) -> Vec<Vec<T>> {
         .collect()
 }
 
+/// The bank against its single twins built from the same models: where a single compensator
+/// is refused, the bank is refused naming the first refused channel with that error; otherwise
+/// `accessors` compares what the bank reports of each channel, then [`assert_twins`] their
+/// outputs.
+pub fn refused_or_twins<T: Real, K: CompensatorBank<T>, C: Compensator<T>>(
+    singles: Vec<Result<C, CoreError>>,
+    bank: Result<K, BankError>,
+    desired: &[Vec<T>],
+    what: &str,
+    accessors: impl FnOnce(&K, &[C]) -> Result<(), TestCaseError>,
+) -> Result<(), TestCaseError> {
+    let singles: Result<Vec<C>, (usize, CoreError)> = singles
+        .into_iter()
+        .enumerate()
+        .map(|(c, s)| s.map_err(|e| (c, e)))
+        .collect();
+    match (singles, bank) {
+        (Err((channel, error)), Err(refused)) => {
+            prop_assert_eq!(refused, BankError::Channel { channel, error });
+        }
+        (Err((channel, _)), Ok(_)) => {
+            prop_assert!(
+                false,
+                "{} bank accepted channel {} its single refuses",
+                what,
+                channel
+            );
+        }
+        (Ok(_), Err(refused)) => {
+            prop_assert!(
+                false,
+                "{} bank refused ({}) channels their singles accept",
+                what,
+                refused
+            );
+        }
+        (Ok(mut singles), Ok(mut bank)) => {
+            accessors(&bank, &singles)?;
+            assert_twins(&mut bank, &mut singles, desired, what)?;
+        }
+    }
+    Ok(())
+}
+
 /// Builds IHC and WIHC banks of `W` lanes in `mode` and compares them with their twins; when
 /// a channel is refused, the bank names the first refused channel with its error.
 pub fn check_plant_banks<T: Real, const W: usize>(
@@ -172,70 +216,30 @@ pub fn check_plant_banks<T: Real, const W: usize>(
         .collect();
     let desired = rows::<T>(desired);
     let each = each_limit(&limits, plants.len());
-    // IHC.
-    let singles: Vec<Result<Ihc<T, Vec<T>>, CoreError>> = plants
-        .iter()
-        .zip(&each)
-        .map(|(p, l)| Ihc::new(p, *l, mode))
-        .collect();
-    let bank = IhcBank::<T, Heap, W>::new(&plants, &limits, mode);
-    match singles.iter().position(Result::is_err) {
-        Some(c) => {
-            let expected = singles[c].clone().unwrap_err();
-            prop_assert_eq!(
-                bank.unwrap_err(),
-                BankError::Channel {
-                    channel: c,
-                    error: expected
+    // IHC, then WIHC: the same checks on each kind.
+    macro_rules! plant_kind {
+        ($single:ident, $bank:ident, $what:literal) => {{
+            let singles: Vec<Result<$single<T, Vec<T>>, CoreError>> = plants
+                .iter()
+                .zip(&each)
+                .map(|(p, l)| $single::new(p, *l, mode))
+                .collect();
+            let bank = $bank::<T, Heap, W>::new(&plants, &limits, mode);
+            refused_or_twins(singles, bank, &desired, $what, |bank, singles| {
+                prop_assert_eq!(bank.mode(), mode);
+                for (c, single) in singles.iter().enumerate() {
+                    prop_assert_eq!(
+                        bank.guard_relaxation(c).map(|mu| mu.to_f64().to_bits()),
+                        Some(single.guard_relaxation().to_f64().to_bits())
+                    );
                 }
-            );
-        }
-        None => {
-            let mut singles: Vec<_> = singles.into_iter().map(Result::unwrap).collect();
-            let mut bank = bank.unwrap();
-            prop_assert_eq!(bank.mode(), mode);
-            for (c, single) in singles.iter().enumerate() {
-                prop_assert_eq!(
-                    bank.guard_relaxation(c).map(|mu| mu.to_f64().to_bits()),
-                    Some(single.guard_relaxation().to_f64().to_bits())
-                );
-            }
-            prop_assert_eq!(bank.guard_relaxation(singles.len()), None);
-            assert_twins(&mut bank, &mut singles, &desired, "IHC")?;
-        }
+                prop_assert_eq!(bank.guard_relaxation(singles.len()), None);
+                Ok(())
+            })?;
+        }};
     }
-    // WIHC.
-    let singles: Vec<Result<Wihc<T, Vec<T>>, CoreError>> = plants
-        .iter()
-        .zip(&each)
-        .map(|(p, l)| Wihc::new(p, *l, mode))
-        .collect();
-    let bank = WihcBank::<T, Heap, W>::new(&plants, &limits, mode);
-    match singles.iter().position(Result::is_err) {
-        Some(c) => {
-            let expected = singles[c].clone().unwrap_err();
-            prop_assert_eq!(
-                bank.unwrap_err(),
-                BankError::Channel {
-                    channel: c,
-                    error: expected
-                }
-            );
-        }
-        None => {
-            let mut singles: Vec<_> = singles.into_iter().map(Result::unwrap).collect();
-            let mut bank = bank.unwrap();
-            prop_assert_eq!(bank.mode(), mode);
-            for (c, single) in singles.iter().enumerate() {
-                prop_assert_eq!(
-                    bank.guard_relaxation(c).map(|mu| mu.to_f64().to_bits()),
-                    Some(single.guard_relaxation().to_f64().to_bits())
-                );
-            }
-            prop_assert_eq!(bank.guard_relaxation(singles.len()), None);
-            assert_twins(&mut bank, &mut singles, &desired, "WIHC")?;
-        }
-    }
+    plant_kind!(Ihc, IhcBank, "IHC");
+    plant_kind!(Wihc, WihcBank, "WIHC");
     Ok(())
 }
 
@@ -294,20 +298,12 @@ pub fn check_dihc_bank<T: Real, const W: usize>(
         .map(|((m, r), l)| Dihc::new(m, r.0, r.1, *l))
         .collect();
     let bank = DihcBank::<T, Heap, W>::new(&inverses, &ranges, &limits);
-    match singles.iter().position(Result::is_err) {
-        Some(c) => {
-            let expected = singles[c].clone().unwrap_err();
-            prop_assert_eq!(
-                bank.unwrap_err(),
-                BankError::Channel {
-                    channel: c,
-                    error: expected
-                }
-            );
-        }
-        None => {
-            let mut singles: Vec<_> = singles.into_iter().map(Result::unwrap).collect();
-            let mut bank = bank.unwrap();
+    refused_or_twins(
+        singles,
+        bank,
+        &rows::<T>(desired),
+        "DIHC",
+        |bank, singles| {
             for (c, single) in singles.iter().enumerate() {
                 let bits = |(lo, hi): (T, T)| (lo.to_f64().to_bits(), hi.to_f64().to_bits());
                 prop_assert_eq!(
@@ -316,10 +312,9 @@ pub fn check_dihc_bank<T: Real, const W: usize>(
                 );
             }
             prop_assert_eq!(bank.input_range(singles.len()), None);
-            assert_twins(&mut bank, &mut singles, &rows::<T>(desired), "DIHC")?;
-        }
-    }
-    Ok(())
+            Ok(())
+        },
+    )
 }
 
 /// Banks whose plain delayed loop every channel accepts (gain below 1, up to 12 operators), so
