@@ -78,9 +78,8 @@ fn compile_now(source: &str, name: &str) -> PathBuf {
     program
 }
 
-fn round_trip_program() -> &'static PathBuf {
-    static PROGRAM: OnceLock<PathBuf> = OnceLock::new();
-    PROGRAM.get_or_init(|| compile_example("round_trip"))
+fn round_trip_program() -> PathBuf {
+    compile_example("round_trip")
 }
 
 #[test]
@@ -354,9 +353,8 @@ fn makefile_builds_and_runs_both_examples() {
     assert!(stdout.contains("round trip OK"), "{stdout}");
 }
 
-fn bank_program() -> &'static PathBuf {
-    static PROGRAM: OnceLock<PathBuf> = OnceLock::new();
-    PROGRAM.get_or_init(|| compile("bindings/c/tests/c/bank.c", "bank"))
+fn bank_program() -> PathBuf {
+    compile("bindings/c/tests/c/bank.c", "bank")
 }
 
 /// The arguments of `bindings/c/tests/c/bank.c`: the three-axis set, Table 1's plant model and
@@ -403,7 +401,7 @@ fn c_programs_run_clean_under_valgrind() {
         "bindings/c/tests/c/delayed_auto_predict.c",
         "delayed_auto_predict",
     );
-    let runs: Vec<(&PathBuf, Vec<std::ffi::OsString>, i32)> = vec![
+    let runs: Vec<(PathBuf, Vec<std::ffi::OsString>, i32)> = vec![
         (
             round_trip_program(),
             vec!["models/table1-plant.json".into()],
@@ -415,9 +413,9 @@ fn c_programs_run_clean_under_valgrind() {
             1,
         ),
         (round_trip_program(), vec![], 2),
-        (&models, vec![dir.path().into()], 0),
-        (&learner, vec!["models/table1-plant.json".into()], 0),
-        (&delayed_auto_predict, vec![], 0),
+        (models, vec![dir.path().into()], 0),
+        (learner, vec!["models/table1-plant.json".into()], 0),
+        (delayed_auto_predict, vec![], 0),
         (
             bank_program(),
             BANK_ARGS.iter().map(Into::into).collect(),
@@ -434,7 +432,7 @@ fn c_programs_run_clean_under_valgrind() {
                 "--errors-for-leak-kinds=definite",
                 "-q",
             ])
-            .arg(program)
+            .arg(&program)
             .args(&args)
             .current_dir(workspace_root())
             .output()
