@@ -1,7 +1,11 @@
 //! Banks of compensators in f64 against their oracle, the single-channel compensators: on
 //! random banks every channel's output equals its own compensator's bit for bit, sample after
-//! sample, in every solve mode and on every vector path this processor runs, with blocks of 1, 3 and 8 lanes;
-//! so do the diagnostics, after a reset too. The same in f32: `bank_f32.rs`.
+//! sample, in every solve mode and on every vector path this processor runs, with blocks of 3
+//! (DIHC) and 8 lanes; so do the diagnostics, after a reset too. The same in f32, with blocks
+//! of 2, 3 and 8 lanes: `bank_f32.rs`. (IHC and WIHC in blocks of one lane were tested too,
+//! until CI came to 30 minutes on the project's AMD machine: their kernels, every mode on three
+//! vector paths, were compiled for that test alone; blocks of 2 and 3 lanes still check the
+//! kernels at widths other than 8.)
 
 mod bank_twins;
 mod common;
@@ -23,13 +27,6 @@ proptest! {
     fn plant_banks_equal_their_single_channels(seed in any::<u64>(), channels in 1usize..21, mode in 0usize..4) {
         let (models, limits, desired) = random_bank(seed, channels, 300);
         check_plant_banks::<f64, 8>(&models, &limits, &desired, MODES[mode])?;
-    }
-
-    /// Blocks of one lane.
-    #[test]
-    fn plant_banks_of_one_lane_equal_their_single_channels(seed in any::<u64>(), channels in 1usize..8, mode in 0usize..4) {
-        let (models, limits, desired) = random_bank(seed, channels, 200);
-        check_plant_banks::<f64, 1>(&models, &limits, &desired, MODES[mode])?;
     }
 
     /// DIHC banks (inverse models on their input ranges), blocks of eight and of three lanes.
