@@ -10,8 +10,7 @@ use bank_twins::*;
 use common::*;
 use hystcomp_core::{
     BankError, CompensatorBank, CoreError, DihcBank, Fixed, Heap, IhcBank, Mpim, OutputLimits,
-    PLAIN_DEGREE, SolveMode, VectorPath, Wihc, WihcBank, dihc_bank_rows, plant_bank_rows,
-    with_vector_path,
+    PLAIN_DEGREE, SolveMode, Wihc, WihcBank, dihc_bank_rows, plant_bank_rows,
 };
 use proptest::prelude::*;
 
@@ -41,10 +40,6 @@ proptest! {
     }
 }
 
-/// The compilations of the kernels besides the default (the widest the processor has); which
-/// of them this processor cannot run, `bank_f64.rs` says.
-const PATHS: [VectorPath; 3] = [VectorPath::Baseline, VectorPath::Avx2, VectorPath::Avx512];
-
 proptest! {
     #![proptest_config(seeded(24, 1603))]
 
@@ -53,15 +48,7 @@ proptest! {
     /// (limits, clamps, NaN and infinite inputs, diagnostics), so the paths equal each other.
     #[test]
     fn every_vector_path_equals_the_single_channels(seed in any::<u64>(), channels in 1usize..21, mode in 0usize..4) {
-        let (models, limits, desired) = random_bank(seed, channels, 200);
-        let ranges = random_ranges(seed ^ 0xD2, channels);
-        for path in PATHS.into_iter().filter(|p| p.available()) {
-            with_vector_path(path, || -> Result<(), TestCaseError> {
-                prop_assert_eq!(VectorPath::current(), path);
-                check_plant_banks::<f32, 8>(&models, &limits, &desired, MODES[mode])?;
-                check_dihc_bank::<f32, 8>(&models, &ranges, &limits, &desired)
-            })?;
-        }
+        check_every_vector_path::<f32>(seed, channels, MODES[mode])?;
     }
 }
 
@@ -69,9 +56,7 @@ proptest! {
 /// bank runs `SolveMode::Delayed` itself rather than naming a refused channel.
 #[test]
 fn accepted_delayed_loops_equal_their_single_channels() {
-    for (models, limits, desired) in accepted_delayed_banks() {
-        check_plant_banks::<f32, 8>(&models, &limits, &desired, SolveMode::Delayed).unwrap();
-    }
+    check_accepted_delayed_loops::<f32>();
 }
 
 /// Fixed storage (no allocator): a six-axis bank in f32 with two lanes per block equals the

@@ -14,7 +14,7 @@ use bank_twins::*;
 use common::*;
 use hystcomp_core::{
     BankError, CompensatorBank, CoreError, Heap, Ihc, IhcBank, Mpim, OutputLimits, SolveMode,
-    VectorPath, WihcBank, with_vector_path,
+    VectorPath, WihcBank,
 };
 use proptest::prelude::*;
 use rand::RngExt;
@@ -39,9 +39,6 @@ proptest! {
     }
 }
 
-/// The compilations of the kernels besides the default (the widest the processor has).
-const PATHS: [VectorPath; 3] = [VectorPath::Baseline, VectorPath::Avx2, VectorPath::Avx512];
-
 /// A compilation this processor cannot run is said, not passed silently.
 #[test]
 fn every_vector_path_runs_here_or_is_said() {
@@ -64,15 +61,7 @@ proptest! {
     /// (limits, clamps, NaN and infinite inputs, diagnostics), so the paths equal each other.
     #[test]
     fn every_vector_path_equals_the_single_channels(seed in any::<u64>(), channels in 1usize..21, mode in 0usize..4) {
-        let (models, limits, desired) = random_bank(seed, channels, 200);
-        let ranges = random_ranges(seed ^ 0xD2, channels);
-        for path in PATHS.into_iter().filter(|p| p.available()) {
-            with_vector_path(path, || -> Result<(), TestCaseError> {
-                prop_assert_eq!(VectorPath::current(), path);
-                check_plant_banks::<f64, 8>(&models, &limits, &desired, MODES[mode])?;
-                check_dihc_bank::<f64, 8>(&models, &ranges, &limits, &desired)
-            })?;
-        }
+        check_every_vector_path::<f64>(seed, channels, MODES[mode])?;
     }
 }
 
@@ -80,9 +69,7 @@ proptest! {
 /// bank runs `SolveMode::Delayed` itself rather than naming a refused channel.
 #[test]
 fn accepted_delayed_loops_equal_their_single_channels() {
-    for (models, limits, desired) in accepted_delayed_banks() {
-        check_plant_banks::<f64, 8>(&models, &limits, &desired, SolveMode::Delayed).unwrap();
-    }
+    check_accepted_delayed_loops::<f64>();
 }
 
 /// A refused channel is named: the bank's error is the first refused channel's own error.

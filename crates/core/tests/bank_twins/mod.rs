@@ -11,7 +11,8 @@
 use crate::common::*;
 use hystcomp_core::{
     BankError, Compensator, CompensatorBank, CoreError, Dihc, DihcBank, Heap, Ihc, IhcBank,
-    InputPolynomial, MAX_INPUT_DEGREE, Mpim, OutputLimits, Real, SolveMode, Wihc, WihcBank,
+    InputPolynomial, MAX_INPUT_DEGREE, Mpim, OutputLimits, Real, SolveMode, VectorPath, Wihc,
+    WihcBank, with_vector_path,
 };
 use proptest::prelude::*;
 use rand::{Rng, RngExt};
@@ -199,6 +200,22 @@ pub fn refused_or_twins<T: Real, K: CompensatorBank<T>, C: Compensator<T>>(
     Ok(())
 }
 
+/// A bank's models and limits in `T`.
+type Typed<T> = (Vec<Mpim<T, Vec<T>>>, Vec<OutputLimits<T>>);
+
+/// The models and limits of a random bank in `T` (`None` when a model is not valid there).
+fn in_type<T: Real>(models: &[VecMpim], limits: &[(f64, f64)]) -> Option<Typed<T>> {
+    let models = models
+        .iter()
+        .map(convert::<T>)
+        .collect::<Option<Vec<_>>>()?;
+    let limits = limits
+        .iter()
+        .map(|&(a, b)| OutputLimits::new(T::from_f64(a), T::from_f64(b)).unwrap())
+        .collect();
+    Some((models, limits))
+}
+
 /// Builds IHC and WIHC banks of `W` lanes in `mode` and compares them with their twins; when
 /// a channel is refused, the bank names the first refused channel with its error.
 pub fn check_plant_banks<T: Real, const W: usize>(
@@ -207,13 +224,9 @@ pub fn check_plant_banks<T: Real, const W: usize>(
     desired: &[Vec<f64>],
     mode: SolveMode,
 ) -> Result<(), TestCaseError> {
-    let Some(plants) = models.iter().map(convert::<T>).collect::<Option<Vec<_>>>() else {
+    let Some((plants, limits)) = in_type::<T>(models, limits) else {
         return Ok(());
     };
-    let limits: Vec<OutputLimits<T>> = limits
-        .iter()
-        .map(|&(a, b)| OutputLimits::new(T::from_f64(a), T::from_f64(b)).unwrap())
-        .collect();
     let desired = rows::<T>(desired);
     let each = each_limit(&limits, plants.len());
     // IHC, then WIHC: the same checks on each kind.
@@ -280,13 +293,9 @@ pub fn check_dihc_bank<T: Real, const W: usize>(
     limits: &[(f64, f64)],
     desired: &[Vec<f64>],
 ) -> Result<(), TestCaseError> {
-    let Some(inverses) = models.iter().map(convert::<T>).collect::<Option<Vec<_>>>() else {
+    let Some((inverses, limits)) = in_type::<T>(models, limits) else {
         return Ok(());
     };
-    let limits: Vec<OutputLimits<T>> = limits
-        .iter()
-        .map(|&(a, b)| OutputLimits::new(T::from_f64(a), T::from_f64(b)).unwrap())
-        .collect();
     let ranges: Vec<(T, T)> = ranges
         .iter()
         .map(|&(a, b)| (T::from_f64(a), T::from_f64(b)))
@@ -347,4 +356,34 @@ pub fn random_ranges(seed: u64, channels: usize) -> Vec<(f64, f64)> {
     (0..channels)
         .map(|_| (0.1 * rng.random::<f64>(), 0.8 + 0.2 * rng.random::<f64>()))
         .collect()
+}
+
+/// The compilations of the kernels besides the default (the widest the processor has).
+pub const PATHS: [VectorPath; 3] = [VectorPath::Baseline, VectorPath::Avx2, VectorPath::Avx512];
+
+/// On every compilation of the kernels this processor can run, chosen explicitly, IHC, WIHC and
+/// DIHC banks of eight lanes in `T` on a random bank equal their single twins bit for bit.
+pub fn check_every_vector_path<T: Real>(
+    seed: u64,
+    channels: usize,
+    mode: SolveMode,
+) -> Result<(), TestCaseError> {
+    let (models, limits, desired) = random_bank(seed, channels, 200);
+    let ranges = random_ranges(seed ^ 0xD2, channels);
+    for path in PATHS.into_iter().filter(|p| p.available()) {
+        with_vector_path(path, || -> Result<(), TestCaseError> {
+            prop_assert_eq!(VectorPath::current(), path);
+            check_plant_banks::<T, 8>(&models, &limits, &desired, mode)?;
+            check_dihc_bank::<T, 8>(&models, &ranges, &limits, &desired)
+        })?;
+    }
+    Ok(())
+}
+
+/// The plain delayed loops of [`accepted_delayed_banks`] in `T`, eight lanes, equal their
+/// single twins.
+pub fn check_accepted_delayed_loops<T: Real>() {
+    for (models, limits, desired) in accepted_delayed_banks() {
+        check_plant_banks::<T, 8>(&models, &limits, &desired, SolveMode::Delayed).unwrap();
+    }
 }
