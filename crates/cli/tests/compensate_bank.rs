@@ -339,6 +339,45 @@ fn bad_input_names_the_channel() {
     );
 }
 
+/// A file that has every channel's named column but cannot be read by name (a bad value in
+/// one of them) is refused with that value's line: it is never read from other columns by
+/// position instead, which would drive the channels from the wrong trajectories.
+#[test]
+fn a_bad_named_column_is_an_error_not_a_fallback() {
+    let dir = tempfile::tempdir().unwrap();
+    let set_file = models().join("table1-xyz-set.json");
+    let out = dir.path().join("drive.csv");
+    let path = dir.path().join("named.csv");
+    let mut text = String::from("time_s,ref_x,x,y,z\n");
+    for k in 0..50 {
+        let z = if k == 17 {
+            "abc".to_string()
+        } else {
+            "30".to_string()
+        };
+        text.push_str(&format!("{},31,30,30,{z}\n", k as f64 * 1e-3));
+    }
+    std::fs::write(&path, text).unwrap();
+    assert_fails(
+        &ihc_args(&set_file, &path, &out, &[]),
+        &[
+            "line 19",
+            "\"abc\" is not a number",
+            "named after the channels",
+        ],
+    );
+    assert!(!out.exists());
+    // Without the channels' names the columns are taken by position, and an index whose
+    // channels run past the largest index is refused, not wrapped.
+    let desired = trajectory(dir.path(), ["a", "b", "c"]);
+    let huge = usize::MAX.to_string();
+    assert_fails(
+        &ihc_args(&set_file, &desired, &out, &["--desired-column", &huge]),
+        &["leaves no column for channel 1"],
+    );
+    assert!(!out.exists());
+}
+
 #[test]
 fn bench_times_the_banks() {
     let output = hystcomp(&[

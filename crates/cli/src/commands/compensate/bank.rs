@@ -9,7 +9,7 @@
 
 use hystcomp_io::bank::{ModelSet, ScaledBank};
 use hystcomp_io::compensator::Method;
-use hystcomp_io::data::{self, Column, Columns, ReadOptions};
+use hystcomp_io::data::{self, Column, Columns, DataError, ReadOptions};
 use serde::Serialize;
 
 use super::{Args, build_error, clamped, earliest, range};
@@ -80,11 +80,32 @@ fn read_trajectory(
             .iter()
             .map(|n| Column::Name((*n).to_string()))
             .collect();
-        if let Ok(record) = read(named) {
-            return Ok(record);
+        // Only a file without those columns falls back to positions: any other failure (a
+        // bad value, a name matching two columns) is this read's error, not a reason to drive
+        // the channels from other columns.
+        match read(named) {
+            Ok(record) => return Ok(record),
+            Err(DataError::NoSuchColumn { .. } | DataError::NoSuchVariable { .. }) => {}
+            Err(error) => {
+                return Err(CliError::from(error).context(format!(
+                    "reading the columns named after the channels of {} ({})",
+                    args.model.display(),
+                    set.names().join(", ")
+                )));
+            }
         }
         match &args.desired_column {
-            Column::Index(first) => (0..channels).map(|c| Column::Index(first + c)).collect(),
+            Column::Index(first) => (0..channels)
+                .map(|c| {
+                    first.checked_add(c).map(Column::Index).ok_or_else(|| {
+                        CliError::input(format!(
+                            "--desired-column {first} leaves no column for channel {c}: the \
+                             columns of the {channels} channels run past the largest index"
+                        ))
+                    })
+                })
+                .collect::<Result<_, _>>()?,
+            other if channels == 1 => vec![other.clone()],
             other => {
                 return Err(CliError::input(format!(
                     "--desired-column {other} names one column, but the model set {} has \
