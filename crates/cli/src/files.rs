@@ -104,6 +104,21 @@ impl<'a> Files<'a> {
             .collect();
         for (k, (output, out_path, kind, out)) in outputs.iter().enumerate() {
             for (input, in_path, resolved_input) in &inputs {
+                // (An output inside the directory is refused below, with its own message.)
+                if *kind == Kind::File
+                    && resolved_input.directory
+                    && !out.path.starts_with(&resolved_input.path)
+                    && let Some(entry) = entry_same_as(in_path, out)
+                {
+                    return Err(CliError::input(format!(
+                        "{output} {} is the same file as {} in {input} {}, a directory the \
+                         command reads (a link to it, or the link's target): writing there \
+                         would destroy that input; give another output path",
+                        out_path.display(),
+                        entry.display(),
+                        in_path.display()
+                    )));
+                }
                 match kind {
                     Kind::File if out.same_file(resolved_input) => {
                         return Err(CliError::input(format!(
@@ -157,6 +172,21 @@ impl<'a> Files<'a> {
         }
         Ok(())
     }
+}
+
+/// The most entries of an input directory [`entry_same_as`] looks at: more than a model set
+/// may hold ([`hystcomp_io::bank::MAX_CHANNELS`]), which its reader refuses anyway.
+const MAX_LISTED: usize = 1 << 17;
+
+/// An entry of the directory `dir` that is the same file as `out` (through a symbolic or hard
+/// link the directory holds: an output outside the directory can still be one of its inputs).
+fn entry_same_as(dir: &Path, out: &Resolved) -> Option<PathBuf> {
+    std::fs::read_dir(dir)
+        .ok()?
+        .take(MAX_LISTED)
+        .filter_map(Result::ok)
+        .map(|entry| entry.path())
+        .find(|entry| Resolved::new(entry).same_file(out))
 }
 
 /// A path as the file system resolves it.
@@ -240,6 +270,38 @@ mod tests {
 
     fn touch(path: &Path) {
         std::fs::write(path, "x").unwrap();
+    }
+
+    /// An output outside an input directory that one of the directory's entries links to
+    /// (symbolically or by a hard link) is that input: refused, its contents untouched.
+    #[cfg(unix)]
+    #[test]
+    fn an_output_linked_from_an_input_directory_is_refused() {
+        let dir = tempfile::tempdir().unwrap();
+        let models = dir.path().join("models");
+        std::fs::create_dir(&models).unwrap();
+        let target = dir.path().join("x.json");
+        touch(&target);
+        std::os::unix::fs::symlink(&target, models.join("x.json")).unwrap();
+        let hard = dir.path().join("y.json");
+        touch(&hard);
+        std::fs::hard_link(&hard, models.join("y.json")).unwrap();
+        for out in [&target, &hard] {
+            let err = Files::new()
+                .input("--model", &models)
+                .output("--output", out)
+                .check()
+                .unwrap_err();
+            assert!(err.to_string().contains("in --model"), "{err}");
+            assert_eq!(std::fs::read_to_string(out).unwrap(), "x");
+        }
+        // A file beside them that no entry links to is a valid output.
+        let other = dir.path().join("drive.csv");
+        Files::new()
+            .input("--model", &models)
+            .output("--output", &other)
+            .check()
+            .unwrap();
     }
 
     #[test]
