@@ -42,7 +42,8 @@ pub const MODEL_SET_VERSION: u32 = 1;
 /// actuators), checked before the channels are read.
 pub const MAX_CHANNELS: usize = 1 << 16;
 
-/// The largest model-set file read: 256 MiB (4 096 channels of 10 operators take about
+/// The largest model-set file read, and the most a directory set's model files may add up
+/// to: 256 MiB (4 096 channels of 10 operators take about
 /// 6 MiB, [`MAX_CHANNELS`] of them about 100 MiB), checked while reading. Reading keeps the
 /// text and each channel's text (the channels are parsed one at a time), about three times
 /// the file's size, besides the models.
@@ -63,6 +64,48 @@ fn raw_fields(text: &str) -> Result<RawFields, String> {
             Err(_) => format!("is not valid JSON: {e}"),
         }
     })
+}
+
+/// Why a set's `channels` field could not be listed.
+enum ChannelListError {
+    /// Not a JSON array.
+    NotArray,
+    /// More than [`MAX_CHANNELS`] entries (found while reading, before the one beyond it).
+    TooMany,
+}
+
+/// The entries of a set's `channels` array, each kept as its text, refused as soon as it
+/// holds more than [`MAX_CHANNELS`]: a file of millions of tiny entries is never listed whole.
+fn channel_list(raw: &RawValue) -> Result<Vec<Box<RawValue>>, ChannelListError> {
+    use serde::de::{Deserializer, Error, SeqAccess, Visitor};
+    use std::cell::Cell;
+
+    struct Bounded<'a>(&'a Cell<bool>);
+    impl<'de> Visitor<'de> for Bounded<'_> {
+        type Value = Vec<Box<RawValue>>;
+        fn expecting(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+            f.write_str("an array of channels")
+        }
+        fn visit_seq<A: SeqAccess<'de>>(self, mut seq: A) -> Result<Self::Value, A::Error> {
+            let mut list = Vec::new();
+            while let Some(entry) = seq.next_element::<Box<RawValue>>()? {
+                if list.len() == MAX_CHANNELS {
+                    self.0.set(true);
+                    return Err(A::Error::custom("too many channels"));
+                }
+                list.push(entry);
+            }
+            Ok(list)
+        }
+    }
+    let too_many = Cell::new(false);
+    let mut reader = serde_json::Deserializer::from_str(raw.get());
+    reader
+        .deserialize_seq(Bounded(&too_many))
+        .map_err(|_| match too_many.get() {
+            true => ChannelListError::TooMany,
+            false => ChannelListError::NotArray,
+        })
 }
 
 /// A small field's value (a name, a version): the text is valid JSON, parsed already once.
@@ -309,18 +352,17 @@ impl ModelSet {
             Some(Value::String(s)) => Some(s),
             Some(_) => return Err(set_error("\"description\" is not a string".into())),
         };
-        let Some(list) = fields
-            .get("channels")
-            .and_then(|raw| serde_json::from_str::<Vec<Box<RawValue>>>(raw.get()).ok())
-        else {
-            return Err(set_error("has no \"channels\" array".into()));
+        let list = match fields.get("channels").map(|raw| channel_list(raw)) {
+            Some(Ok(list)) => list,
+            None | Some(Err(ChannelListError::NotArray)) => {
+                return Err(set_error("has no \"channels\" array".into()));
+            }
+            Some(Err(ChannelListError::TooMany)) => {
+                return Err(set_error(format!(
+                    "holds more than the {MAX_CHANNELS} channels a model set may hold"
+                )));
+            }
         };
-        if list.len() > MAX_CHANNELS {
-            return Err(set_error(format!(
-                "holds {} channels, more than the {MAX_CHANNELS} a model set may hold",
-                list.len()
-            )));
-        }
         let mut channels = Vec::with_capacity(list.len());
         for (k, raw) in list.iter().enumerate() {
             let entry: RawFields = serde_json::from_str(raw.get()).map_err(|_| {
@@ -396,6 +438,20 @@ impl ModelSet {
             ));
         }
         files.sort();
+        // The files together are bounded as one set file is, before any is parsed (each alone
+        // by the model file's bound, which its reader checks while reading).
+        let mut total = 0u64;
+        for (k, file) in files.iter().enumerate() {
+            total = total.saturating_add(std::fs::metadata(file).map_or(0, |m| m.len()));
+            if total > MAX_MODEL_SET_BYTES {
+                return Err(set_error(format!(
+                    "its model files add up to more than the {} MiB a model set may hold (at \
+                     {}, channel {k})",
+                    MAX_MODEL_SET_BYTES >> 20,
+                    file.display()
+                )));
+            }
+        }
         let mut channels = Vec::with_capacity(files.len());
         for (k, file) in files.iter().enumerate() {
             let name = stem(file);
@@ -447,10 +503,15 @@ pub fn is_model_set(path: &Path) -> bool {
     if path.is_dir() {
         return true;
     }
+    /// The one field looked at; every other is skipped unparsed (no tree of the whole file).
+    #[derive(serde::Deserialize)]
+    struct Format {
+        format: Option<String>,
+    }
     match crate::bounded::read_at_most(path, MAX_MODEL_SET_BYTES) {
-        Ok(crate::bounded::Bounded::Whole(bytes)) => serde_json::from_slice::<Value>(&bytes)
+        Ok(crate::bounded::Bounded::Whole(bytes)) => serde_json::from_slice::<Format>(&bytes)
             .ok()
-            .and_then(|v| v.get("format").and_then(Value::as_str).map(str::to_owned))
+            .and_then(|f| f.format)
             .is_some_and(|f| f == MODEL_SET_FORMAT),
         _ => false,
     }
@@ -686,6 +747,21 @@ impl ScaledBank {
     /// Every channel back to its initial state.
     pub fn reset(&mut self) {
         self.bank.reset();
+    }
+
+    /// The channels whose drive the last tick held (its desired position's normalised value
+    /// not finite: NaN or infinite, or finite but too large for the channel's scale): how
+    /// many, and the first one's index (0 when none).
+    pub fn held(&self) -> (usize, usize) {
+        let mut held = self
+            .scratch_desired
+            .iter()
+            .enumerate()
+            .filter(|(_, y)| !y.is_finite());
+        match held.next() {
+            Some((first, _)) => (1 + held.count(), first),
+            None => (0, 0),
+        }
     }
 
     /// One control tick: `control[c]` is the drive for `desired[c]`, every channel (physical

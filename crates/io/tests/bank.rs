@@ -250,6 +250,26 @@ fn bad_sets_are_refused_naming_the_channel() {
         "{}",
         &message[..message.len().min(300)]
     );
+    // More entries than a set may hold: refused while the array is read, the count named
+    // (and an array that is not one, as no array).
+    let many = format!(
+        r#"{{"format": "hystcomp-model-set", "format_version": 1, "channels": [{}0]}}"#,
+        "0,".repeat(hystcomp_io::bank::MAX_CHANNELS)
+    );
+    let message = set_error(&many);
+    assert!(
+        message.contains("more than the 65536 channels"),
+        "{message}"
+    );
+    let exactly = format!(
+        r#"{{"format": "hystcomp-model-set", "format_version": 1, "channels": [{}0]}}"#,
+        "0,".repeat(hystcomp_io::bank::MAX_CHANNELS - 1)
+    );
+    assert!(set_error(&exactly).contains("channel 0: not an object"));
+    assert!(
+        set_error(r#"{"format": "hystcomp-model-set", "format_version": 1, "channels": {}}"#)
+            .contains("no \"channels\" array")
+    );
     let mut twice: serde_json::Value = serde_json::from_str(&good).unwrap();
     twice["channels"][2]["name"] = serde_json::json!("x");
     assert!(set_error(&twice.to_string()).contains("used twice"));
@@ -270,6 +290,57 @@ fn bad_sets_are_refused_naming_the_channel() {
         .unwrap_err()
         .to_string();
     assert!(message.contains("missing.json"), "{message}");
+}
+
+/// A directory set's model files together are bounded as one set file is: a directory of
+/// links to one large model file is refused before any of them is parsed,
+/// naming the file and channel where the sum passed it. Whether a file is a set is decided by
+/// its `format` field alone.
+#[cfg(unix)]
+#[test]
+fn a_directory_set_is_bounded_in_total_and_sets_are_told_by_their_format() {
+    use hystcomp_io::bank::{MAX_MODEL_SET_BYTES, is_model_set};
+    let dir = tempfile::tempdir().unwrap();
+    let good = std::fs::read_to_string(models_dir().join("table1-plant.json")).unwrap();
+    let mut padded: serde_json::Value = serde_json::from_str(&good).unwrap();
+    padded["description"] = serde_json::json!("p".repeat(1 << 20));
+    let big = dir.path().join("big.json");
+    std::fs::write(&big, padded.to_string()).unwrap();
+    let size = std::fs::metadata(&big).unwrap().len();
+    let links = dir.path().join("links");
+    std::fs::create_dir(&links).unwrap();
+    let count = MAX_MODEL_SET_BYTES / size + 2;
+    for k in 0..count {
+        std::os::unix::fs::symlink(&big, links.join(format!("c{k:03}.json"))).unwrap();
+    }
+    let message = ModelSet::load(&links).unwrap_err().to_string();
+    let passed = MAX_MODEL_SET_BYTES / size;
+    assert!(
+        message.contains("add up to more than the 256 MiB")
+            && message.contains(&format!("c{passed:03}.json, channel {passed})")),
+        "{message}"
+    );
+    // Two of them are a set.
+    let two = dir.path().join("two");
+    std::fs::create_dir(&two).unwrap();
+    for k in 0..2 {
+        std::os::unix::fs::symlink(&big, two.join(format!("c{k}.json"))).unwrap();
+    }
+    assert_eq!(ModelSet::load(&two).unwrap().len(), 2);
+    // A set by its format field only: a set file is, a model file or a file whose format is
+    // not the set's (or not a string) is not.
+    let set_file = models_dir().join("table1-xyz-set.json");
+    assert!(is_model_set(&set_file));
+    assert!(is_model_set(&two));
+    assert!(!is_model_set(&big));
+    for (k, text) in [r#"{"format": 3}"#, r#"{"format": "other"}"#, "[1]", "{"]
+        .iter()
+        .enumerate()
+    {
+        let file = dir.path().join(format!("f{k}.json"));
+        std::fs::write(&file, text).unwrap();
+        assert!(!is_model_set(&file), "{text}");
+    }
 }
 
 /// One model of many operators pads every channel of its bank to its rows: a bank whose
