@@ -911,7 +911,8 @@ int hystcomp_bank_channels(const struct HystcompBank *h, size_t *channels);
  * may be the same array (in place); they must not otherwise overlap.
  *
  * Every `v[c]` lies within its channel's limits and is never NaN. A NaN or infinite `y_d[c]`
- * holds channel `c`'s previous drive; the tick is still done for every channel and
+ * (or one so large that it overflows when normalised by the channel's scale) holds channel
+ * `c`'s previous drive; the tick is still done for every channel and
  * `HYSTCOMP_STATUS_NON_FINITE_INPUT` is returned. Never allocates on success.
  *
  * # Safety
@@ -1145,7 +1146,8 @@ int hystcomp_compensator_from_parameters(const double *thresholds,
  * One sample: writes to `*v_out` the drive for the desired position `y_d`.
  *
  * `*v_out` always lies within the compensator's limits and is never NaN. A NaN or infinite
- * `y_d` holds the previous output, writes it to `*v_out` and returns
+ * `y_d` (or one so large that it overflows when normalised by the model's scale) holds the
+ * previous output, writes it to `*v_out` and returns
  * `HYSTCOMP_STATUS_NON_FINITE_INPUT`. Never allocates on success.
  *
  * # Safety
@@ -1158,7 +1160,7 @@ int hystcomp_compensator_step(struct HystcompCompensator *h, double y_d, double 
  * `hystcomp_compensator_step`. `y_d` and `v` may be the same array (in place). With `len == 0`
  * nothing is done and the arrays may be NULL.
  *
- * Non-finite samples hold the previous output; the whole signal is still processed and
+ * Non-finite samples (and samples too large to normalise) hold the previous output; the whole signal is still processed and
  * `HYSTCOMP_STATUS_NON_FINITE_INPUT` is returned, with their count and first index in the
  * message.
  *

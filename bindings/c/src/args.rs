@@ -154,8 +154,9 @@ pub(crate) unsafe fn write_out<T>(
 }
 
 /// Runs `step` over `len` samples from `input` into `output`, element by element, so that the
-/// two arrays may be the same (in place). Returns how many inputs were not finite, and the
-/// first such index.
+/// two arrays may be the same (in place). `step` returns the output and whether it held its
+/// input back (not finite, or not usable). Returns how many were held, and the first such
+/// index.
 ///
 /// # Safety
 /// When `len > 0`, `input` and `output` must be valid for `len` reads and writes respectively
@@ -164,7 +165,7 @@ pub(crate) unsafe fn run_signal(
     input: *const f64,
     output: *mut f64,
     len: usize,
-    mut step: impl FnMut(f64) -> f64,
+    mut step: impl FnMut(f64) -> (f64, bool),
 ) -> Result<(usize, usize), Failure> {
     if len == 0 {
         return Ok((0, 0));
@@ -182,13 +183,13 @@ pub(crate) unsafe fn run_signal(
         // SAFETY: `k < len`, both arrays valid for `len` elements (the caller's contract),
         // non-NULL and aligned (checked); reading before writing allows `input == output`.
         let x = unsafe { input.add(k).read() };
-        if !x.is_finite() {
+        let (y, held) = step(x);
+        if held {
             if count == 0 {
                 first = k;
             }
             count += 1;
         }
-        let y = step(x);
         // SAFETY: as above.
         unsafe { output.add(k).write(y) };
     }

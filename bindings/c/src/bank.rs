@@ -193,27 +193,13 @@ pub unsafe extern "C" fn hystcomp_bank_channels(
     })
 }
 
-/// Counts the non-finite values of a tick, and the index of the first (0 when none), in one
-/// pass.
-fn non_finite(values: &[f64]) -> (usize, usize) {
-    let (mut count, mut first) = (0, 0);
-    for (k, x) in values.iter().enumerate() {
-        if !x.is_finite() {
-            if count == 0 {
-                first = k;
-            }
-            count += 1;
-        }
-    }
-    (count, first)
-}
-
 /// One control tick: `v[c]` is the drive for the desired position `y_d[c]` of channel `c`,
 /// `channels` values each (the bank's channel count; another count is refused). `y_d` and `v`
 /// may be the same array (in place); they must not otherwise overlap.
 ///
 /// Every `v[c]` lies within its channel's limits and is never NaN. A NaN or infinite `y_d[c]`
-/// holds channel `c`'s previous drive; the tick is still done for every channel and
+/// (or one so large that it overflows when normalised by the channel's scale) holds channel
+/// `c`'s previous drive; the tick is still done for every channel and
 /// `HYSTCOMP_STATUS_NON_FINITE_INPUT` is returned. Never allocates on success.
 ///
 /// # Safety
@@ -297,11 +283,6 @@ unsafe fn tick(
             // SAFETY: `v` valid for `len` reads and writes (the caller's contract), non-NULL
             // and aligned (checked), `at + channels <= len`; no other reference to it.
             let values = unsafe { std::slice::from_raw_parts_mut(v.add(at), channels) };
-            let (c, f) = non_finite(values);
-            if c > 0 && count == 0 {
-                first = at + f;
-            }
-            count += c;
             b.inner.step_in_place(values)?;
         } else {
             // SAFETY: as above, for `y_d` (reads) and `v` (writes), which do not overlap (the
@@ -312,13 +293,13 @@ unsafe fn tick(
                     std::slice::from_raw_parts_mut(v.add(at), channels),
                 )
             };
-            let (c, f) = non_finite(input);
-            if c > 0 && count == 0 {
-                first = at + f;
-            }
-            count += c;
             b.inner.step(input, output)?;
         }
+        let (c, f) = b.inner.held();
+        if c > 0 && count == 0 {
+            first = at + f;
+        }
+        count += c;
     }
     if count == 0 {
         Ok(())
@@ -326,8 +307,9 @@ unsafe fn tick(
         Err(Failure::new(
             HystcompStatus::NonFiniteInput,
             format!(
-                "{count} desired position(s) were NaN or infinite (the first at index {first}: \
-                 tick {}, channel {}); those channels held their previous drive",
+                "{count} desired position(s) were NaN or infinite, or too large to normalise \
+                 by their channel's scale (the first at index {first}: tick {}, channel {}); \
+                 those channels held their previous drive",
                 first / channels,
                 first % channels
             ),

@@ -200,7 +200,8 @@ pub unsafe extern "C" fn hystcomp_compensator_from_parameters(
 /// One sample: writes to `*v_out` the drive for the desired position `y_d`.
 ///
 /// `*v_out` always lies within the compensator's limits and is never NaN. A NaN or infinite
-/// `y_d` holds the previous output, writes it to `*v_out` and returns
+/// `y_d` (or one so large that it overflows when normalised by the model's scale) holds the
+/// previous output, writes it to `*v_out` and returns
 /// `HYSTCOMP_STATUS_NON_FINITE_INPUT`. Never allocates on success.
 ///
 /// # Safety
@@ -217,17 +218,19 @@ pub unsafe extern "C" fn hystcomp_compensator_step(
         if v_out.is_null() {
             return Err(Failure::null("v_out"));
         }
+        let held = c.inner.holds(y_d);
         let v = c.inner.step(y_d);
         // SAFETY: non-NULL (checked above, before the state moves), valid for a write (the
         // caller's contract).
         unsafe { v_out.write(v) };
-        if y_d.is_finite() {
-            Ok(())
-        } else {
+        if held {
             Err(Failure::new(
                 HystcompStatus::NonFiniteInput,
-                "the desired position is NaN or infinite; the previous output was held",
+                "the desired position is NaN or infinite (or too large to normalise by the \
+                 model's scale); the previous output was held",
             ))
+        } else {
+            Ok(())
         }
     })
 }
@@ -236,7 +239,7 @@ pub unsafe extern "C" fn hystcomp_compensator_step(
 /// `hystcomp_compensator_step`. `y_d` and `v` may be the same array (in place). With `len == 0`
 /// nothing is done and the arrays may be NULL.
 ///
-/// Non-finite samples hold the previous output; the whole signal is still processed and
+/// Non-finite samples (and samples too large to normalise) hold the previous output; the whole signal is still processed and
 /// `HYSTCOMP_STATUS_NON_FINITE_INPUT` is returned, with their count and first index in the
 /// message.
 ///
@@ -254,7 +257,12 @@ pub unsafe extern "C" fn hystcomp_compensator_process(
         // SAFETY: a live handle or NULL (the caller's contract).
         let c = unsafe { handle(h, "compensator handle") }?;
         // SAFETY: `len` elements each, or NULL (the caller's contract).
-        let (count, first) = unsafe { run_signal(y_d, v, len, |x| c.inner.step(x)) }?;
+        let (count, first) = unsafe {
+            run_signal(y_d, v, len, |x| {
+                let held = c.inner.holds(x);
+                (c.inner.step(x), held)
+            })
+        }?;
         if count == 0 {
             Ok(())
         } else {

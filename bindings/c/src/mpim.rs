@@ -171,12 +171,13 @@ pub unsafe extern "C" fn hystcomp_mpim_process(
         let m = unsafe { handle(m, "model handle") }?;
         // SAFETY: `len` elements each, or NULL (the caller's contract).
         let (count, first) = unsafe {
-            run_signal(
-                x,
-                y,
-                len,
-                |x| if x.is_finite() { m.step(x) } else { f64::NAN },
-            )
+            run_signal(x, y, len, |x| {
+                if x.is_finite() {
+                    (m.step(x), false)
+                } else {
+                    (f64::NAN, true)
+                }
+            })
         }?;
         if count == 0 {
             Ok(())

@@ -427,3 +427,89 @@ fn a_dihc_bank_equals_its_channels_own_compensators_bit_for_bit() {
         }
     }
 }
+
+/// A finite desired position so large that it overflows when normalised by its channel's scale
+/// (here a displacement in mm, 0.075 mm per normalised unit) holds that channel's drive, as
+/// NaN does, and is reported with its channel: never a silent hold. The channel's own
+/// compensator reports it too, and both give the same bits.
+#[test]
+fn a_position_too_large_to_normalise_is_reported_with_its_channel() {
+    let mut set = hystcomp_io::bank::ModelSet::load(std::path::Path::new(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../../models/table1-xyz-set.json"
+    )))
+    .unwrap();
+    let output = &mut set.channels[1].model.output;
+    output.unit = "mm".into();
+    output.scale /= 1000.0;
+    output.offset /= 1000.0;
+    let dir = tempfile::tempdir().unwrap();
+    let set_path = dir.path().join("set.json");
+    set.save(&set_path).unwrap();
+    let single_path = dir.path().join("y.json");
+    set.channels[1].model.save(&single_path).unwrap();
+    let method = CString::new("ihc").unwrap();
+    let (set_c, single_c) = (
+        CString::new(set_path.to_str().unwrap()).unwrap(),
+        CString::new(single_path.to_str().unwrap()).unwrap(),
+    );
+    let (mut bank, mut single) = (null_mut(), null_mut());
+    // SAFETY: valid strings and out-parameters; no limits (the models' own).
+    unsafe {
+        assert_eq!(
+            hystcomp_bank_from_model_set(set_c.as_ptr(), method.as_ptr(), null(), 0, 0, &mut bank),
+            OK,
+            "{}",
+            last_error()
+        );
+        assert_eq!(
+            hystcomp_compensator_from_model_file(
+                single_c.as_ptr(),
+                method.as_ptr(),
+                0.0,
+                0.0,
+                0,
+                &mut single
+            ),
+            OK,
+            "{}",
+            last_error()
+        );
+    }
+    for (k, (y, too_large)) in [
+        (0.03, false),
+        (f64::MAX, true),
+        (0.04, false),
+        (-1e308, true),
+    ]
+    .into_iter()
+    .enumerate()
+    {
+        let d = [30.0, y, 30.0];
+        let mut v = [f64::NAN; 3];
+        let mut expected = f64::NAN;
+        // SAFETY: live handles, three doubles each, an out-parameter.
+        let (bank_status, single_status) = unsafe {
+            (
+                hystcomp_bank_step(bank, d.as_ptr(), v.as_mut_ptr(), 3),
+                hystcomp_compensator_step(single, y, &mut expected),
+            )
+        };
+        let status = if too_large { NON_FINITE_INPUT } else { OK };
+        assert_eq!(bank_status, status, "tick {k}: {}", last_error());
+        assert_eq!(single_status, status, "tick {k}");
+        if too_large {
+            // The single compensator's message is the last error now; ask the bank again.
+            // SAFETY: as above.
+            unsafe { hystcomp_bank_step(bank, d.as_ptr(), v.as_mut_ptr(), 3) };
+            assert!(last_error().contains("channel 1"), "{}", last_error());
+        }
+        assert_eq!(v[1].to_bits(), expected.to_bits(), "tick {k}");
+        assert!(v.iter().all(|x| x.is_finite()), "tick {k}: {v:?}");
+    }
+    // SAFETY: live handles, freed once.
+    unsafe {
+        hystcomp_bank_free(bank);
+        hystcomp_compensator_free(single);
+    }
+}

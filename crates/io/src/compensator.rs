@@ -576,6 +576,13 @@ impl ScaledCompensator {
         self.inner.get_mut().reset();
     }
 
+    /// Whether [`ScaledCompensator::step`] holds its previous drive for `desired`: when its
+    /// normalised value is not finite (NaN or infinite, or finite but too large for the
+    /// model's scale, which overflows to infinity when normalised).
+    pub fn holds(&self, desired: f64) -> bool {
+        !self.desired.normalise(desired).is_finite()
+    }
+
     /// One sample: the drive for the desired position `desired` (physical units). With a
     /// vibration link the drive returned is for the desired position fed
     /// [`ScaledCompensator::preview`] samples earlier (streaming with a preview).
