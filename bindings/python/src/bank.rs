@@ -5,7 +5,8 @@
 use std::path::PathBuf;
 use std::sync::{Mutex, MutexGuard};
 
-use hystcomp_io::bank::{Channel, ModelSet, ModelSetError, ScaledBank};
+use hystcomp_io::bank::{Channel, MAX_CHANNELS, ModelSet, ModelSetError, ScaledBank};
+use hystcomp_io::model_file::ModelFile as IoModelFile;
 use numpy::{PyArray1, PyArrayMethods};
 use pyo3::exceptions::PyTypeError;
 use pyo3::prelude::*;
@@ -173,6 +174,13 @@ impl CompensatorBank {
         let set = match models {
             SetArg::Path(path) => ModelSet::load(&path).map_err(set_error)?,
             SetArg::List(list) => {
+                if list.len() > MAX_CHANNELS {
+                    return Err(invalid(format!(
+                        "models holds {} entries, more than the {MAX_CHANNELS} channels a bank \
+                         may have",
+                        list.len()
+                    )));
+                }
                 let mut channels = Vec::with_capacity(list.len());
                 for (k, model) in list.into_iter().enumerate() {
                     let name = match &model {
@@ -182,7 +190,20 @@ impl CompensatorBank {
                             .unwrap_or_else(|| format!("channel_{k}")),
                         ModelArg::File(_) => format!("channel_{k}"),
                     };
-                    let model = model.load()?;
+                    let model = match model {
+                        ModelArg::Path(path) => {
+                            IoModelFile::load(&path).map_err(|error| {
+                                // Named by its place in the list, as a set names its channels.
+                                set_error(ModelSetError::File {
+                                    path: path.display().to_string(),
+                                    channel: k,
+                                    name: name.clone(),
+                                    error,
+                                })
+                            })?
+                        }
+                        file => file.load()?,
+                    };
                     channels.push(Channel { name, model });
                 }
                 // Two files of the same stem in different directories: number them instead.
@@ -202,7 +223,8 @@ impl CompensatorBank {
             Some(LimitsArg::Many(pairs)) => Some(
                 pairs
                     .into_iter()
-                    .map(|p| crate::arrays::pair(p, "limits"))
+                    .enumerate()
+                    .map(|(k, p)| crate::arrays::pair(p, &format!("limits[{k}]")))
                     .collect::<PyResult<Vec<_>>>()?,
             ),
         };

@@ -113,6 +113,11 @@ def test_bad_input_is_refused_with_the_reason():
         hystcomp.CompensatorBank(SET_FILE, "ihc", [(0.0, 10.0), (0.0, 10.0)])
     with pytest.raises(OSError):
         hystcomp.CompensatorBank(MODELS / "no-such-set.json")
+    # A list's missing file and a bad limits pair are named by their place in the list.
+    with pytest.raises(FileNotFoundError, match=r"channel 1 \(missing\)"):
+        hystcomp.CompensatorBank([TABLE1_FILE, MODELS / "missing.json"], "ihc")
+    with pytest.raises(hystcomp.InvalidValueError, match=r"limits\[1\] must be two numbers"):
+        hystcomp.CompensatorBank(SET_FILE, "ihc", [(0.0, 10.0), (0.0, 10.0, 5.0), (0.0, 10.0)])
 
 
 def test_a_refused_channel_model_names_the_set_file(tmp_path):
