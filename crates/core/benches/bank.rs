@@ -3,6 +3,11 @@
 //! channel's own factor in [0.9, 1.1]) and its own phase of a three-tone trajectory, stepped
 //! tick after tick for C = 1, 8, 64, 1 024 and 4 096, in f64 and f32.
 //!
+//! A second set of groups, `bank_f32_n100` and `bank_f64_n100`, times the same banks with 100
+//! operators per channel (the paper's tables spread) at C = 64 and 1 024: the delayed and
+//! guarded IHC then walk the inverse's segments instead of evaluating it directly
+//! ([`hystcomp_core::DIRECT_OPERATORS`]).
+//!
 //! Criterion's throughput is in channel-steps (ticks x channels) per second: divide 1e9 by it
 //! for nanoseconds per channel-step, the figure issue 16's acceptance names.
 //!
@@ -17,7 +22,7 @@ use hystcomp_core::{
 };
 use std::hint::black_box;
 
-use hystcomp_core::paper::bank_workload::{channel_models, signal};
+use hystcomp_core::paper::bank_workload::{channel_models_of, signal};
 
 /// Ticks per measured iteration.
 const TICKS: usize = 200;
@@ -33,17 +38,29 @@ fn path() -> VectorPath {
     }
 }
 
-fn bench_type<T: Real>(c: &mut Criterion, type_name: &str) {
+/// The channel counts of the 100-operator groups.
+const CHANNELS_N100: [usize; 2] = [64, 1_024];
+
+fn bench_type<T: Real>(c: &mut Criterion, type_name: &str, operators: usize) {
     let path = path();
-    let mut group = c.benchmark_group(format!("bank_{type_name}"));
+    let (name, counts) = match operators {
+        10 => (format!("bank_{type_name}"), &CHANNELS[..]),
+        n => (format!("bank_{type_name}_n{n}"), &CHANNELS_N100[..]),
+    };
+    let mut group = c.benchmark_group(name);
     group.warm_up_time(std::time::Duration::from_secs(1));
     group.measurement_time(std::time::Duration::from_secs(3));
     let limits = [OutputLimits::new(T::zero(), T::one()).unwrap()];
-    for channels in CHANNELS {
+    for &channels in counts {
         group.throughput(Throughput::Elements((TICKS * channels) as u64));
         // Few samples for the large banks: each iteration is already 800 000 channel-steps.
-        group.sample_size(if channels >= 1_024 { 20 } else { 50 });
-        let (plants, inverses) = channel_models::<T>(channels).expect("the paper's tables");
+        group.sample_size(if channels * operators >= 10_240 {
+            20
+        } else {
+            50
+        });
+        let (plants, inverses) =
+            channel_models_of::<T>(channels, operators).expect("the paper's tables");
         let desired = signal(&plants, TICKS).expect("a bounded workload");
         let mut control = vec![T::zero(); desired.len()];
         let mut banks: Vec<(&str, Box<dyn CompensatorBank<T>>)> = vec![
@@ -102,8 +119,10 @@ fn bench_type<T: Real>(c: &mut Criterion, type_name: &str) {
 }
 
 fn benches(c: &mut Criterion) {
-    bench_type::<f32>(c, "f32");
-    bench_type::<f64>(c, "f64");
+    for operators in [10, 100] {
+        bench_type::<f32>(c, "f32", operators);
+        bench_type::<f64>(c, "f64", operators);
+    }
 }
 
 criterion_group!(bank, benches);

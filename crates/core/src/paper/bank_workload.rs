@@ -25,7 +25,17 @@ pub fn channel_model<T: Real>(
     table: &PublishedMpim,
     channel: usize,
 ) -> Result<Mpim<T, Vec<T>>, CoreError> {
-    let base: Mpim<T, Vec<T>> = table.spread(OPERATORS)?;
+    channel_model_of(table, channel, OPERATORS)
+}
+
+/// [`channel_model`] spread over `operators` operators (a multiple of 10) instead of
+/// [`OPERATORS`]: the same hysteresis, for timing larger models.
+pub fn channel_model_of<T: Real>(
+    table: &PublishedMpim,
+    channel: usize,
+    operators: usize,
+) -> Result<Mpim<T, Vec<T>>, CoreError> {
+    let base: Mpim<T, Vec<T>> = table.spread(operators)?;
     let s = ((channel as f64) * 0.618_034).fract() * 2.0 - 1.0;
     let scale = T::from_f64(1.0 + 0.1 * s);
     let weights: Vec<T> = base.weights().iter().map(|&b| b * scale).collect();
@@ -35,8 +45,18 @@ pub fn channel_model<T: Real>(
 /// The plants (Table 1, for IHC and WIHC) and the inverse models (Table 2, for DIHC) of
 /// `channels` channels, each channel's [`channel_model`].
 pub fn channel_models<T: Real>(channels: usize) -> Result<(Models<T>, Models<T>), CoreError> {
+    channel_models_of(channels, OPERATORS)
+}
+
+/// [`channel_models`] of `operators` operators each ([`channel_model_of`]).
+pub fn channel_models_of<T: Real>(
+    channels: usize,
+    operators: usize,
+) -> Result<(Models<T>, Models<T>), CoreError> {
     let models = |table: &PublishedMpim| -> Result<Models<T>, CoreError> {
-        (0..channels).map(|c| channel_model(table, c)).collect()
+        (0..channels)
+            .map(|c| channel_model_of(table, c, operators))
+            .collect()
     };
     Ok((models(&TABLE1)?, models(&TABLE2)?))
 }
