@@ -845,3 +845,60 @@ fn on_the_real_record_the_full_model_predicts_no_worse_than_hysteresis_alone() {
     );
     assert!(!stderr(&out).contains("NaN"), "{}", stderr(&out));
 }
+
+/// A sample rate so low that the default creep bank's shortest time constant (two decimated
+/// periods) passes its longest (1000 s): refused with the reason and the way out, for
+/// `identify` and `crossval` alike, never a panic (it was `f64::clamp` with its bounds
+/// crossed).
+#[test]
+fn a_sample_rate_too_low_for_the_default_creep_bank_is_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let data = dir.path().join("slow.csv");
+    let mut text = String::from("voltage_v,displacement_um\n");
+    for k in 0..400 {
+        let v = 5.0 + 4.0 * (k as f64 * 0.05).sin();
+        text.push_str(&format!(
+            "{v},{}\n",
+            7.0 * v + 0.3 * (k as f64 * 0.05).cos()
+        ));
+    }
+    std::fs::write(&data, text).unwrap();
+    let out = dir.path().join("model.json");
+    for (rate, decimation) in [("0.001", "1"), ("1", "1000")] {
+        for command in ["identify", "crossval"] {
+            let mut args = vec![command];
+            match command {
+                "identify" => args.extend(["--data", s(&data)]),
+                _ => args.extend(["--train", s(&data), "--test", s(&data)]),
+            }
+            args.extend([
+                "--voltage-column",
+                "1",
+                "--displacement-column",
+                "2",
+                "--sample-rate",
+                rate,
+                "--decimation",
+                decimation,
+                "--creep",
+            ]);
+            if command == "identify" {
+                args.extend(["-o", s(&out)]);
+            }
+            let output = hystcomp(&args);
+            assert_eq!(
+                output.status.code(),
+                Some(1),
+                "{args:?}: {}",
+                stderr(&output)
+            );
+            assert!(
+                stderr(&output).contains("beyond the longest")
+                    && stderr(&output).contains("--creep-time-constants"),
+                "{args:?}: {}",
+                stderr(&output)
+            );
+            assert!(!out.exists());
+        }
+    }
+}

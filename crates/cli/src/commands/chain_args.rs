@@ -103,21 +103,33 @@ impl ChainArgs {
             "",
         )?;
         let rate = sample_rate(columns, loaded)?;
-        let creep = self.has_creep().then(|| match &self.creep_time_constants {
-            Some(t) => CreepOptions {
+        let creep = match (self.has_creep(), &self.creep_time_constants) {
+            (false, _) => None,
+            (true, Some(t)) => Some(CreepOptions {
                 time_constants_s: t.clone(),
                 smoothness: 0.0,
                 from_holds: false,
                 hold_smoothness_candidates: Vec::new(),
-            },
-            None => {
+            }),
+            (true, None) => {
                 // From 10 ms (or two decimated periods) to a quarter of the record (at most
                 // 1000 s): longer elements would fit the sensor's drift, not creep.
+                const LONGEST_S: f64 = 1000.0;
                 let shortest = (2.0 * self.decimation as f64 / rate).max(0.01);
+                if shortest > LONGEST_S {
+                    return Err(CliError::input(format!(
+                        "at {rate} Hz with --decimation {} the shortest creep time constant \
+                         (two decimated sample periods) would be {shortest} s, beyond the \
+                         longest the default bank takes ({LONGEST_S} s): check the sample \
+                         rate (or the time column's unit), or give --creep-time-constants",
+                        self.decimation
+                    )));
+                }
                 let record_s = loaded.voltage.len() as f64 / rate;
-                CreepOptions::log_spaced(shortest, (record_s / 4.0).clamp(shortest, 1000.0), 2)
+                let longest = (record_s / 4.0).max(shortest).min(LONGEST_S);
+                Some(CreepOptions::log_spaced(shortest, longest, 2))
             }
-        });
+        };
         let creep = creep.map(|c| match self.creep_fit {
             CreepFit::Joint => c,
             CreepFit::Holds => {
