@@ -312,10 +312,13 @@ impl<T: Real, B: Buffer<T>> VibrationInverse<T, B> {
     }
 
     /// The preview at which the anti-causal series' cut tail falls below [`TAIL_TOLERANCE`]
-    /// of its absolute sum: offline inversion uses it.
+    /// of its absolute sum, at most [`MAX_PREVIEW_SAMPLES`]: offline inversion uses it. A zero
+    /// just outside the unit circle makes the series converge too slowly for that; the inverse
+    /// at the longest preview then folds the cut tail into its last tap (the static gain kept)
+    /// and [`VibrationInverse::truncation`] says how much was cut.
     pub fn needed_preview(numerator: &[T], delay: usize) -> Result<usize, CoreError> {
         let plan = Plan::new(numerator, delay)?;
-        Ok(delay + plan.unstable + plan.needed_taps - 1)
+        Ok((delay + plan.unstable + plan.needed_taps - 1).min(MAX_PREVIEW_SAMPLES))
     }
 
     /// The preview `p`, samples: the output lags the input by `p`.
@@ -324,7 +327,8 @@ impl<T: Real, B: Buffer<T>> VibrationInverse<T, B> {
     }
 
     /// The cut tail of the anti-causal series, relative to its absolute sum (0 when nothing
-    /// was cut; below [`TAIL_TOLERANCE`] at [`VibrationInverse::needed_preview`]).
+    /// was cut; below [`TAIL_TOLERANCE`] at [`VibrationInverse::needed_preview`] unless that
+    /// is [`MAX_PREVIEW_SAMPLES`]).
     pub fn truncation(&self) -> f64 {
         self.truncation
     }

@@ -400,3 +400,31 @@ fn the_benchmarks_reference_chain_is_a_stable_resonance_with_a_zero_outside_the_
         assert!((f64::from(*s) - d).abs() < 1e-6 * d.abs().max(1.0));
     }
 }
+
+/// A zero just outside the unit circle (at -1.0005) makes the anti-causal series converge
+/// over tens of thousands of samples: the needed preview is the longest one allowed, the
+/// inverse builds there (a model that loads can always be inverted without a preview given),
+/// says how much of the series it cut, and keeps the static gain.
+#[test]
+fn a_slowly_converging_inverse_takes_the_longest_preview_and_says_what_it_cut() {
+    use hystcomp_core::vibration::{MAX_PREVIEW_SAMPLES, TAIL_TOLERANCE};
+    let b0 = 0.5 / 2.0005;
+    let numerator = [b0, b0 * 1.0005];
+    let denominator = [1.0, -0.5];
+    let preview = VibrationInverse::<f64, Vec<f64>>::needed_preview(&numerator, 0).unwrap();
+    assert_eq!(preview, MAX_PREVIEW_SAMPLES);
+    let mut inverse =
+        VibrationInverse::<f64, Vec<f64>>::new(&numerator, &denominator, 0, preview).unwrap();
+    assert!(
+        inverse.truncation() > TAIL_TOLERANCE,
+        "{}",
+        inverse.truncation()
+    );
+    assert!(inverse.truncation() < 1.0);
+    // A constant input comes out unchanged once the preview has filled (unit static gain).
+    let mut last = f64::NAN;
+    for _ in 0..3 * preview {
+        last = inverse.step(0.25);
+    }
+    assert!((last - 0.25).abs() < 1e-9, "{last}");
+}
