@@ -333,8 +333,9 @@ impl<T: Real, B: Buffer<T>> VibrationInverse<T, B> {
         self.truncation
     }
 
-    /// The preview this inverse would need for a negligible cut
-    /// ([`VibrationInverse::needed_preview`]).
+    /// The preview this inverse would need for a negligible cut: what
+    /// [`VibrationInverse::needed_preview`] gives, before it is capped at
+    /// [`MAX_PREVIEW_SAMPLES`].
     pub fn recommended_preview(&self) -> usize {
         self.needed
     }
