@@ -31,6 +31,12 @@ use nalgebra::{DMatrix, DVector};
 
 use crate::IdentifyError;
 
+/// The most holds a record may have for the holds fit: 64 (the study's excitation has three).
+/// Each hold is a column of the fit's least squares beside the creep weights, and choosing
+/// the smoothness refits it once per hold left out for every candidate, so its cost grows
+/// steeply with their number; checked before any row is built.
+pub const MAX_HOLDS: usize = 64;
+
 /// Samples after the voltage stops moving that a hold skips, s: the stage's fast dynamics
 /// (amplifier, resonance) settle within them.
 pub const HOLD_SETTLE_S: f64 = 0.02;
@@ -109,6 +115,17 @@ impl HoldRows {
             .map(|h| (h.start + settle).min(h.end)..h.end.min(displacement.len()))
             .filter(|h| h.len() >= 2 * decimation.max(1))
             .collect();
+        if holds.len() > MAX_HOLDS {
+            return Err(IdentifyError::InvalidOption {
+                option: "creep holds",
+                value: format!("{} holds", holds.len()),
+                reason: format!(
+                    "the holds fit takes at most {MAX_HOLDS} holds (each one a column of its \
+                     least squares, refitted once per hold left out): select a row range \
+                     with fewer, or fit creep jointly"
+                ),
+            });
+        }
         let m = time_constants_s.len();
         if holds.is_empty() || m == 0 || displacement.is_empty() {
             return Err(IdentifyError::InvalidOption {

@@ -158,3 +158,43 @@ fn a_record_without_holds_is_refused_with_the_reason() {
             .unwrap_err();
     assert!(error.to_string().contains("two holds"), "{error}");
 }
+
+/// A staircase of more holds than the fit takes is refused before any row is built, naming
+/// the count and the way out; as many as it takes are fitted.
+#[test]
+fn more_holds_than_the_fit_takes_are_refused_with_the_count() {
+    use hystcomp_identify::creep_holds::MAX_HOLDS;
+    let rate = 1000.0;
+    let (step, hold) = (5, 100);
+    let mut volts = Vec::new();
+    for k in 0..=MAX_HOLDS {
+        let level = k as f64 / MAX_HOLDS as f64;
+        for s in 0..step {
+            volts.push(level - (1.0 - s as f64 / step as f64) / MAX_HOLDS as f64);
+        }
+        volts.extend(std::iter::repeat_n(level, hold));
+    }
+    let um: Vec<f64> = volts.iter().map(|v| 75.0 * v).collect();
+    let holds = held_segments(&volts, hold / 2);
+    assert_eq!(holds.len(), MAX_HOLDS + 1);
+    let error = creep_weights_from_holds(&um, 1.0 / rate, 1, &holds, &taus(), 0.0, &[], 75.0)
+        .unwrap_err()
+        .to_string();
+    assert!(
+        error.contains(&format!("{} holds", MAX_HOLDS + 1))
+            && error.contains(&format!("at most {MAX_HOLDS}"))
+            && error.contains("fit creep jointly"),
+        "{error}"
+    );
+    creep_weights_from_holds(
+        &um,
+        1.0 / rate,
+        1,
+        &holds[..MAX_HOLDS],
+        &taus(),
+        0.0,
+        &[],
+        75.0,
+    )
+    .unwrap();
+}
