@@ -9,6 +9,7 @@ use std::path::Path;
 
 use common::{assert_fails, hystcomp, models, s, stderr, stdout};
 use hystcomp_io::data::{Column, ReadOptions, read_columns};
+use hystcomp_io::model_file::{CreepPart, ModelFile};
 
 fn column(path: &Path, name: &str) -> Vec<f64> {
     read_columns(path, &[Column::Name(name.into())], &ReadOptions::default())
@@ -322,7 +323,145 @@ fn bad_learning_inputs_are_refused_with_the_option_named() {
     let refs: Vec<&str> = a.iter().map(String::as_str).collect();
     assert_fails(&refs, &["499 samples", "aligned sample by sample"]);
     assert!(!out.exists(), "nothing written on refusal");
-    // The output's state file may not be an input either (here: the drive's own state file).
+    // The output's state file may not be an input either (here: the drive's own state file),
+    // nor the output itself (it was compared with the named inputs only).
     std::fs::write(d.join("drive_0.learn.json"), "{}").unwrap();
     check(&[], &d.join("drive_0.out"), &["state file"]);
+    check(
+        &[],
+        &d.join("drive_0.learn.json"),
+        &["--output", "--drive's state file"],
+    );
+    assert_eq!(
+        std::fs::read_to_string(d.join("drive_0.learn.json")).unwrap(),
+        "{}"
+    );
+    std::fs::remove_file(d.join("drive_0.learn.json")).unwrap();
+    // --simulate: a stage file is an input the output's state file may not replace, and a
+    // model with links identified at another rate than the trajectory's is refused.
+    let stage = d.join("st.learn.json");
+    std::fs::write(&stage, "sample_rate_hz = 10000\n").unwrap();
+    let desired = d.join("desired.csv");
+    let simulate = |model: &Path, stage: Option<&Path>, output: &Path, fragments: &[&str]| {
+        let mut a = vec![
+            "learn",
+            "--simulate",
+            "--desired",
+            s(&desired),
+            "--model",
+            s(model),
+            "-o",
+            s(output),
+        ];
+        if let Some(stage) = stage {
+            a.extend(["--stage", s(stage)]);
+        }
+        assert_fails(&a, fragments);
+        assert!(!output.exists());
+    };
+    simulate(&model, Some(&stage), &d.join("st.csv"), &["--stage"]);
+    assert_eq!(
+        std::fs::read_to_string(&stage).unwrap(),
+        "sample_rate_hz = 10000\n"
+    );
+    let mut linked = ModelFile::load(&model).unwrap();
+    linked.format_version = 2;
+    linked.sample_rate_hz = Some(5000.0);
+    linked.creep = Some(CreepPart {
+        origin: 0.0,
+        time_constants_s: vec![1.0],
+        weights: vec![0.05],
+    });
+    let linked_path = d.join("linked.json");
+    linked.save(&linked_path).unwrap();
+    simulate(
+        &linked_path,
+        None,
+        &d.join("linked.csv"),
+        &["identified at 5000 Hz"],
+    );
+    // One trial's periods are bounded in memory (its drive and responses), not only the whole
+    // run in time: 600 periods of 20 000 samples are refused before anything runs.
+    let long = d.join("long.csv");
+    let out = hystcomp(&[
+        "signal",
+        "paper",
+        "--speed",
+        "10",
+        "--duration",
+        "2",
+        "-o",
+        s(&long),
+    ]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    assert_fails(
+        &[
+            "learn",
+            "--simulate",
+            "--desired",
+            s(&long),
+            "--model",
+            s(&model),
+            "--trials",
+            "1",
+            "--periods",
+            "600",
+            "-o",
+            s(&d.join("long_out.csv")),
+        ],
+        &["per trial", "--periods"],
+    );
+}
+
+/// A model whose voltage unit is not V: the drive file's best drive is `best_drive_mv`, and
+/// the next trial reads it back under that name (it looked for `best_drive_v` and failed).
+#[test]
+fn a_model_in_millivolts_learns_trial_after_trial() {
+    let dir = tempfile::tempdir().unwrap();
+    setup(dir.path());
+    let d = dir.path();
+    run_on_stage(d, &d.join("drive_0.csv"), &d.join("meas_0.csv"), 5);
+    let mut model = ModelFile::load(&models().join("table1-plant.json")).unwrap();
+    model.input.unit = "mV".into();
+    model.input.scale *= 1000.0;
+    model.input.offset *= 1000.0;
+    let model_path = d.join("plant-mv.json");
+    model.save(&model_path).unwrap();
+    let out = hystcomp(&[
+        "compensate",
+        "--model",
+        s(&model_path),
+        "--method",
+        "ihc",
+        "--desired",
+        s(&d.join("desired.csv")),
+        "-o",
+        s(&d.join("mv_0.csv")),
+    ]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    for k in 0..2 {
+        let out = hystcomp(&[
+            "learn",
+            "--desired",
+            s(&d.join("desired.csv")),
+            "--drive",
+            s(&d.join(format!("mv_{k}.csv"))),
+            "--measured",
+            s(&d.join("meas_0.csv")),
+            "--model",
+            s(&model_path),
+            "-o",
+            s(&d.join(format!("mv_{}.csv", k + 1))),
+        ]);
+        assert!(out.status.success(), "trial {k}: {}", stderr(&out));
+        let state: serde_json::Value = serde_json::from_str(
+            &std::fs::read_to_string(d.join(format!("mv_{}.learn.json", k + 1))).unwrap(),
+        )
+        .unwrap();
+        assert!(state["best_trial"].is_u64(), "{state}");
+        assert_eq!(
+            column(&d.join(format!("mv_{}.csv", k + 1)), "best_drive_mv").len(),
+            10_000
+        );
+    }
 }

@@ -22,6 +22,10 @@ pub const MAX_TRIALS: usize = 1000;
 /// The most stage samples one simulated run may play in all (1e9: about two minutes of
 /// simulation on this project's machine).
 pub const MAX_SIMULATED_SAMPLES: f64 = 1e9;
+/// The most stage samples one simulated trial may play (its periods together): 1e7. A trial
+/// keeps its drive and five response signals of that length in memory (about 480 MB at the
+/// bound), so the bound is on memory, beside [`MAX_SIMULATED_SAMPLES`] on time.
+pub const MAX_TRIAL_SAMPLES: f64 = 1e7;
 
 /// Why the simulated loop stopped early.
 #[derive(Debug)]
@@ -89,7 +93,15 @@ pub fn check_trials(trials: usize, periods: usize, samples: usize) -> Result<(),
             "--periods {periods}: give 1 to {MAX_PERIODS_PER_TRIAL}"
         )));
     }
-    let total = trials as f64 * periods as f64 * samples as f64;
+    let per_trial = periods as f64 * samples as f64;
+    if per_trial > MAX_TRIAL_SAMPLES {
+        return Err(TrialError::Option(format!(
+            "{periods} periods of {samples} samples are {per_trial:.3e} stage samples per \
+             trial, more than the {MAX_TRIAL_SAMPLES:.0e} one trial holds in memory; lower \
+             --periods (or give a shorter period)"
+        )));
+    }
+    let total = trials as f64 * per_trial;
     if total > MAX_SIMULATED_SAMPLES {
         return Err(TrialError::Option(format!(
             "{trials} trials of {periods} periods of {samples} samples are {total:.3e} stage \

@@ -376,10 +376,12 @@ pub fn run(args: &Args, ctx: Context) -> Result<(), CliError> {
         .maybe_input("--drive", args.drive.as_ref())
         .maybe_input("--measured", args.measured.as_ref())
         .maybe_input("--model", args.model.as_ref())
+        .maybe_input("--stage", args.stage.as_ref())
         .maybe_input(
             "--drive's state file",
             state_in.as_ref().filter(|p| p.exists()),
         )
+        .output("--output", &args.output)
         .output("--output's state file", &state_out)
         .check()?;
     if args.simulate {
@@ -481,13 +483,15 @@ fn trial(
                     .unwrap_or_default()
             )));
         }
-        // The best earlier trial's drive is the drive file's best_drive_v column.
+        // The best earlier trial's drive is the drive file's best_drive_UNIT column (the
+        // model's voltage unit, as `write_drive` names it).
+        let best_name = format!("best_drive_{}", model.input.unit.to_lowercase());
         let best_drive = match state.best_trial {
             Some(_) => Some(read_aligned(
                 args,
                 drive_path,
-                Column::Name("best_drive_v".into()),
-                "--drive's best_drive_v",
+                Column::Name(best_name.clone()),
+                &format!("--drive's {best_name}"),
                 &time,
             )?),
             None => None,
@@ -625,6 +629,8 @@ fn simulate(args: &Args, ctx: Context) -> Result<(), CliError> {
             "the study's exact plant model (least squares on its identification run)".into(),
         ),
     };
+    super::chain_args::check_model_rate(&model, fs, "the desired trajectory")
+        .map_err(|e| e.context(model_name.as_str()))?;
     let options = options(args, fs)?;
     let mut learner = Learner::new(&model, &desired, options).map_err(learn_error)?;
     let seed = args.seed.unwrap_or(stage.seed.wrapping_add(1));
