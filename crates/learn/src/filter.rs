@@ -76,7 +76,9 @@ impl LearningFilter {
         let pad = if periodic {
             0
         } else {
-            ((8.0 * sample_rate_hz / cutoff_hz).ceil() as usize + lead).min(len)
+            // (At most `len` before the lead is added: a cut-off near zero cannot overflow.)
+            let tail = (8.0 * sample_rate_hz / cutoff_hz).ceil().min(len as f64) as usize;
+            tail.saturating_add(lead).min(len)
         };
         let m = len + 2 * pad;
         let mut planner = FftPlanner::new();
@@ -147,5 +149,24 @@ impl LearningFilter {
         for (o, b) in out.iter_mut().zip(&self.buffer[pad..pad + self.len]) {
             *o = b.re;
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::LearningFilter;
+
+    /// A cut-off so low that `8 fs / f_c` passes every integer pads the whole record (the
+    /// most it may), whatever the lead: no overflow (a panic in a debug build, a wrapped and
+    /// wrong padding in a release build).
+    #[test]
+    fn a_cutoff_near_zero_pads_the_whole_record() {
+        for lead in [0, 1, 7] {
+            let filter = LearningFilter::new(64, false, 1000.0, 0.5, 1e-17, 2, lead);
+            assert_eq!(filter.padding(), 64, "lead {lead}");
+        }
+        // An ordinary cut-off pads its tail and the lead, within the record.
+        let filter = LearningFilter::new(10_000, false, 1000.0, 0.5, 100.0, 2, 3);
+        assert_eq!(filter.padding(), 80 + 3);
     }
 }
