@@ -401,6 +401,9 @@ pub unsafe extern "C" fn hystcomp_learner_update(
         if drive_out.is_null() {
             return Err(Failure::null("drive_out"));
         }
+        // Every argument checked before the learner moves: a refused call changes nothing,
+        // so that a caller may fix the argument and call again.
+        crate::args::check_array(drive_out, n, "drive_out")?;
         // SAFETY: `n` readable doubles or NULL. Copied before the drive is written: the two
         // arrays may be one.
         let measured = unsafe { finite(measured, n, "measured") }?.to_vec();

@@ -304,8 +304,32 @@ fn bad_arguments_are_refused_with_their_status_before_anything_is_read() {
             INVALID_ARGUMENT
         );
     }
+    // A misaligned drive_out is refused before the learner learns from a measured record
+    // that would change its drive (it learned first, and a retry learned the trial twice).
+    let off: Vec<f64> = desired.iter().map(|y| y - 1.0).collect();
+    let mut bytes = vec![0u8; (n + 2) * size_of::<f64>()];
+    let base = bytes.as_mut_ptr();
+    let shift = if (base as usize + 1) % align_of::<f64>() == 0 {
+        2
+    } else {
+        1
+    };
+    let misaligned = base.wrapping_add(shift).cast::<f64>();
+    // SAFETY: valid pointers and lengths; the misaligned output is refused before any write.
+    let status = unsafe { hystcomp_learner_update(h, off.as_ptr(), n, misaligned, null_mut()) };
+    assert_eq!(status, INVALID_ARGUMENT);
+    assert!(last_error().contains("drive_out"), "{}", last_error());
     // Refusals changed nothing.
     assert_eq!(drive_of(h, n), before);
+    // The same record with a valid output does change the drive: the check above could fail.
+    let twin = new_learner(model, &desired, &o).unwrap();
+    // SAFETY: valid pointers and lengths.
+    let status =
+        unsafe { hystcomp_learner_update(twin, off.as_ptr(), n, drive.as_mut_ptr(), null_mut()) };
+    assert_eq!(status, OK, "{}", last_error());
+    assert_ne!(drive_of(twin, n), before);
+    // SAFETY: freed once.
+    unsafe { hystcomp_learner_free(twin) };
     let mut samples = 0;
     // SAFETY: a live handle and a valid out-pointer.
     assert_eq!(unsafe { hystcomp_learner_samples(h, &mut samples) }, OK);
