@@ -309,7 +309,7 @@ fn bad_arguments_are_refused_with_their_status_before_anything_is_read() {
     let off: Vec<f64> = desired.iter().map(|y| y - 1.0).collect();
     let mut bytes = vec![0u8; (n + 2) * size_of::<f64>()];
     let base = bytes.as_mut_ptr();
-    let shift = if (base as usize + 1) % align_of::<f64>() == 0 {
+    let shift = if (base as usize + 1).is_multiple_of(align_of::<f64>()) {
         2
     } else {
         1
