@@ -201,6 +201,21 @@ fn bad_values_are_refused_naming_the_option() {
         &["signal", "identification", "--duration=-1", "-o", o],
         &["--duration"],
     );
+    // One second is few samples, but the excitation is built whole at the asked rate before
+    // it is cut: that is bounded too (it allocated gigabytes, or aborted).
+    assert_fails(
+        &[
+            "signal",
+            "identification",
+            "--sample-rate",
+            "1e6",
+            "--duration",
+            "1",
+            "-o",
+            o,
+        ],
+        &["before it is cut", "--speed"],
+    );
     assert_fails(
         &["signal", "triangle", "--rounding", "0.9", "-o", o],
         &["--rounding"],

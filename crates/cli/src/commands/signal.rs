@@ -279,6 +279,18 @@ fn identification(args: &Args) -> Result<(String, Vec<f64>), CliError> {
             args.sample_rate
         )));
     }
+    // The excitation is built whole on its own time base before it is cut: bounded as well.
+    let built = (excitation_length_s(&excitation) * args.sample_rate / args.speed).ceil();
+    if built > MAX_SAMPLES as f64 {
+        return Err(CliError::input(format!(
+            "the identification excitation ({} s) sampled at --sample-rate {} Hz / --speed {} \
+             is {built} samples before it is cut to --duration, more than {MAX_SAMPLES}; give a \
+             lower --sample-rate or a higher --speed",
+            excitation_length_s(&excitation),
+            args.sample_rate,
+            args.speed
+        )));
+    }
     let mut command = excitation.command_v(args.sample_rate / args.speed);
     let last = command.last().copied().unwrap_or(0.0);
     command.resize(samples as usize, last);
