@@ -22,6 +22,7 @@
 //! symbolic links, `..` and the like) or, on Unix, to the same device and inode (hard links).
 //! An output that does not exist yet is resolved through its folder.
 
+use std::borrow::Cow;
 use std::path::{Component, Path, PathBuf};
 
 use crate::CliError;
@@ -29,7 +30,7 @@ use crate::CliError;
 /// The files of one run of a command, each named by the option that gave it.
 #[derive(Debug, Default)]
 pub struct Files<'a> {
-    inputs: Vec<(&'static str, &'a Path)>,
+    inputs: Vec<(&'static str, Cow<'a, Path>)>,
     outputs: Vec<(&'static str, &'a Path, Kind)>,
 }
 
@@ -56,7 +57,26 @@ impl<'a> Files<'a> {
 
     /// An input file named by `option` (e.g. `"--model"`).
     pub fn input(mut self, option: &'static str, path: &'a Path) -> Self {
-        self.inputs.push((option, path));
+        self.inputs.push((option, Cow::Borrowed(path)));
+        self
+    }
+
+    /// An optional stage file (`--stage`): an input, and so is the model file it names
+    /// (`hysteresis.mpim.model_file`, relative to the stage file), which the command reads as
+    /// well. A stage file that cannot be read names nothing more (the command then says why).
+    pub fn stage(mut self, option: &'static str, path: Option<&'a PathBuf>) -> Self {
+        let Some(path) = path else {
+            return self;
+        };
+        self.inputs.push((option, Cow::Borrowed(path.as_path())));
+        if let Ok(config) = hystcomp_stage::StageConfig::from_toml_file(path)
+            && let Some(model) = config.hysteresis.mpim.model_file
+        {
+            self.inputs.push((
+                "the stage file's hysteresis.mpim.model_file",
+                Cow::Owned(model),
+            ));
+        }
         self
     }
 
@@ -95,7 +115,7 @@ impl<'a> Files<'a> {
         let inputs: Vec<(&str, &Path, Resolved)> = self
             .inputs
             .iter()
-            .map(|(option, path)| (*option, *path, Resolved::new(path)))
+            .map(|(option, path)| (*option, path.as_ref(), Resolved::new(path)))
             .collect();
         let outputs: Vec<(&str, &Path, Kind, Resolved)> = self
             .outputs
@@ -300,6 +320,55 @@ mod tests {
         Files::new()
             .input("--model", &models)
             .output("--output", &other)
+            .check()
+            .unwrap();
+    }
+
+    /// A stage file's MPIM model file is an input of every command that reads the stage: an
+    /// output there is refused (relative to the stage file's directory, as the stage reads it).
+    #[test]
+    fn a_stage_files_model_file_is_an_input() {
+        let dir = tempfile::tempdir().unwrap();
+        let stage = dir.path().join("stage.toml");
+        std::fs::write(
+            &stage,
+            "[hysteresis]\nmodel = \"mpim\"\n[hysteresis.mpim]\nmodel_file = \"m.json\"\n",
+        )
+        .unwrap();
+        let model = dir.path().join("m.json");
+        touch(&model);
+        let err = Files::new()
+            .stage("--stage", Some(&stage))
+            .output("--output", &model)
+            .check()
+            .unwrap_err();
+        assert!(
+            err.to_string().contains("hysteresis.mpim.model_file"),
+            "{err}"
+        );
+        assert!(
+            Files::new()
+                .stage("--stage", Some(&stage))
+                .output("--output", &stage)
+                .check()
+                .is_err()
+        );
+        Files::new()
+            .stage("--stage", Some(&stage))
+            .output("--output", &dir.path().join("out.csv"))
+            .check()
+            .unwrap();
+        // No stage, or one that cannot be read, names nothing more.
+        Files::new()
+            .stage("--stage", None)
+            .output("--output", &model)
+            .check()
+            .unwrap();
+        let broken = dir.path().join("broken.toml");
+        std::fs::write(&broken, "not = [toml").unwrap();
+        Files::new()
+            .stage("--stage", Some(&broken))
+            .output("--output", &model)
             .check()
             .unwrap();
     }

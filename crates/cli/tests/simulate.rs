@@ -386,3 +386,35 @@ fn the_stage_files_seed_sets_the_noise_and_seed_on_the_command_line_overrides_it
     assert_ne!(from_file, from_default);
     assert_eq!(overridden, from_default);
 }
+
+/// The model file a stage file names (`hysteresis.mpim.model_file`) is an input of
+/// `simulate`: an output there is refused and the model is left as it was (it was replaced by
+/// the CSV).
+#[test]
+fn the_stage_files_model_file_is_not_overwritten() {
+    let dir = tempfile::tempdir().unwrap();
+    let model = dir.path().join("m.json");
+    std::fs::copy(models().join("table1-plant.json"), &model).unwrap();
+    let stage = dir.path().join("stage.toml");
+    std::fs::write(
+        &stage,
+        "[hysteresis]\nmodel = \"mpim\"\n[hysteresis.mpim]\nmodel_file = \"m.json\"\n",
+    )
+    .unwrap();
+    let input = dir.path().join("in.csv");
+    write_input(&input, 10_000.0, 100);
+    let before = std::fs::read(&model).unwrap();
+    assert_fails(
+        &[
+            "simulate",
+            "--stage",
+            s(&stage),
+            "--drive",
+            s(&input),
+            "-o",
+            s(&model),
+        ],
+        &["hysteresis.mpim.model_file"],
+    );
+    assert_eq!(std::fs::read(&model).unwrap(), before);
+}

@@ -104,7 +104,7 @@ impl NamesFiles for Args {
         Files::new()
             .input("--model", &self.model)
             .input("--desired", &self.trajectory)
-            .maybe_input("--stage", self.stage.as_ref())
+            .stage("--stage", self.stage.as_ref())
             .output("--output", &self.output)
     }
 }

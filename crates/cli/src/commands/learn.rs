@@ -124,7 +124,7 @@ impl NamesFiles for Args {
             .maybe_input("--drive", self.drive.as_ref())
             .maybe_input("--measured", self.measured.as_ref())
             .maybe_input("--model", self.model.as_ref())
-            .maybe_input("--stage", self.stage.as_ref())
+            .stage("--stage", self.stage.as_ref())
             .output("--output", &self.output)
     }
 }
@@ -376,7 +376,7 @@ pub fn run(args: &Args, ctx: Context) -> Result<(), CliError> {
         .maybe_input("--drive", args.drive.as_ref())
         .maybe_input("--measured", args.measured.as_ref())
         .maybe_input("--model", args.model.as_ref())
-        .maybe_input("--stage", args.stage.as_ref())
+        .stage("--stage", args.stage.as_ref())
         .maybe_input(
             "--drive's state file",
             state_in.as_ref().filter(|p| p.exists()),

@@ -49,7 +49,7 @@ pub struct Args {
 impl NamesFiles for Args {
     fn files(&self) -> Files<'_> {
         Files::new()
-            .maybe_input("--stage", self.stage.as_ref())
+            .stage("--stage", self.stage.as_ref())
             .input("--drive", &self.input)
             .output("--output", &self.output)
     }
