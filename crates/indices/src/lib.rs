@@ -69,6 +69,14 @@ pub enum IndexError {
         /// The sample where it did (0-based), when one sample decides it.
         index: Option<usize>,
     },
+    /// An index (a percentage of the desired range) overflows to infinity: the error is too
+    /// large next to the range (a range too small, or values too large).
+    PercentOverflow {
+        /// Which index, e.g. `e_m`.
+        what: &'static str,
+        /// The desired range `max y_d - min y_d`.
+        range: f64,
+    },
     /// Fewer than one bin asked for.
     NoBins,
     /// More bins than the samples support ([`max_mhe_bins`]).
@@ -110,6 +118,11 @@ impl fmt::Display for IndexError {
                      that keeps them within 1e15",
                 )
             }
+            IndexError::PercentOverflow { what, range } => write!(
+                f,
+                "{what} overflows: the error is too large next to the desired range {range:e} \
+                 for a percentage of it; check the records' columns and units"
+            ),
             IndexError::NoBins => write!(f, "e_mhe needs at least one bin"),
             IndexError::TooManyBins { bins, samples } => write!(
                 f,
@@ -181,6 +194,18 @@ fn desired_range(desired: &[f64], measured: &[f64]) -> Result<(f64, f64), IndexE
     Ok((lo, hi))
 }
 
+/// `value / range * 100 %`, refused when it overflows: an error so large next to the desired
+/// range (or a range so small, a subnormal span, say) that the index is not a number one
+/// could print.
+fn percent(value: f64, range: f64, what: &'static str) -> Result<f64, IndexError> {
+    let p = value / range * 100.0;
+    if p.is_finite() {
+        Ok(p)
+    } else {
+        Err(IndexError::PercentOverflow { what, range })
+    }
+}
+
 /// The first sample whose `y - y_d` (or its square, with `squared`) overflows.
 fn first_overflow(desired: &[f64], measured: &[f64], squared: bool) -> Option<usize> {
     desired.iter().zip(measured).position(|(d, y)| {
@@ -203,7 +228,7 @@ pub fn e_m_percent(desired: &[f64], measured: &[f64]) -> Result<f64, IndexError>
         .zip(measured)
         .map(|(d, y)| (y - d).abs())
         .fold(0.0, f64::max);
-    Ok(max / (hi - lo) * 100.0)
+    percent(max, hi - lo, "e_m")
 }
 
 /// (D2): `sqrt(mean (y - y_d)^2) / (max y_d - min y_d) * 100 %` (uniform sampling, so the
@@ -227,7 +252,7 @@ pub fn e_rms_percent(desired: &[f64], measured: &[f64]) -> Result<f64, IndexErro
             index: None,
         });
     }
-    Ok((sum / desired.len() as f64).sqrt() / (hi - lo) * 100.0)
+    percent((sum / desired.len() as f64).sqrt(), hi - lo, "e_rms")
 }
 
 /// Eq. (12) as made precise in ERRATA item 6: the largest vertical width of the `y` versus
@@ -256,12 +281,38 @@ pub fn e_mhe_percent(desired: &[f64], measured: &[f64], bins: usize) -> Result<f
             index: None,
         });
     }
-    Ok(widest / (hi - lo) * 100.0)
+    percent(widest, hi - lo, "e_mhe")
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A desired range so small next to the error that the percentage overflows (a subnormal
+    /// span) is an error naming the index and the range, never an index of `inf`.
+    #[test]
+    fn a_desired_range_too_small_for_a_percentage_is_an_error() {
+        let desired = [0.0, 1e-310, 0.0, 1e-310];
+        let measured = [1.0, 1.0, 0.5, 1.0];
+        let errors = [
+            e_m_percent(&desired, &measured).unwrap_err(),
+            e_rms_percent(&desired, &measured).unwrap_err(),
+            e_mhe_percent(&desired, &measured, 1).unwrap_err(),
+        ];
+        for (error, what) in errors.iter().zip(["e_m", "e_rms", "e_mhe"]) {
+            assert_eq!(
+                *error,
+                IndexError::PercentOverflow {
+                    what,
+                    range: 1e-310
+                }
+            );
+            assert!(error.to_string().starts_with(what), "{error}");
+        }
+        // A small range that still gives a finite percentage is an index.
+        let small = [0.0, 1e-9, 0.0, 1e-9];
+        assert!(e_m_percent(&small, &measured).unwrap().is_finite());
+    }
 
     /// Finite records whose differences, squares or range overflow give an error naming the
     /// sample, never inf or a silent 0 % (issue 13: one 1e308 sample gave e_mhe = 0 %).
@@ -288,9 +339,14 @@ mod tests {
                 e_mhe_percent(&d, &far, 10),
                 Err(IndexError::Overflow { .. })
             ));
+            // Every index of the pair is an error, never inf (e_mhe and e_m were inf).
             assert!(matches!(
                 TrackingIndices::compute(&d, measured, 10),
-                Err(IndexError::Overflow { .. })
+                Err(IndexError::PercentOverflow { what: "e_mhe", .. })
+            ));
+            assert!(matches!(
+                e_m_percent(&d, measured),
+                Err(IndexError::PercentOverflow { what: "e_m", .. })
             ));
         }
         let huge = [-1e308, 1e308];
