@@ -225,6 +225,11 @@ fn bad_values_are_refused_naming_the_option() {
         &["--rise-fraction"],
     );
     assert_fails(&["signal", "steps", "--hold", "0", "-o", o], &["--hold"]);
+    // Values no record could hold are refused, naming the row (counted from 1) and the scale.
+    assert_fails(
+        &["signal", "triangle", "--amplitude", "1e300", "-o", o],
+        &["row ", "beyond the 1e15", "--amplitude"],
+    );
     assert!(!out.exists(), "nothing written on a refusal");
     let usage = hystcomp(&["signal", "nonsense", "-o", o]);
     assert_eq!(usage.status.code(), Some(2));

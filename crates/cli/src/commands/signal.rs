@@ -151,9 +151,13 @@ pub fn run(args: &Args, ctx: Context) -> Result<(), CliError> {
         .enumerate()
         .find(|(_, v)| !v.is_finite() || v.abs() > MAX_MAGNITUDE)
     {
+        // Rows counted from 1 as the written file's data rows are; the cause may be the
+        // scale (--amplitude, --offset) or the shape's own parameters (a chirp's frequency
+        // ratio overflowing, say).
         return Err(CliError::input(format!(
-            "--amplitude/--offset: sample {k} (t = {} s) would be {}, beyond the {MAX_MAGNITUDE:e} \
-             a record may hold; give a smaller --amplitude or --offset",
+            "row {} (t = {} s) would be {}, beyond the {MAX_MAGNITUDE:e} a record may hold: give \
+             a smaller --amplitude or --offset, or check the signal's other parameters",
+            k + 1,
             crate::number(k as f64 / args.sample_rate),
             crate::number(*v),
         )));
