@@ -224,6 +224,12 @@ fn bad_stage_file_is_refused_with_the_field_named() {
             "[amplifier]\noutput_min_v = 150.0\noutput_max_v = 0.0\n",
             &["amplifier.output_min_v..amplifier.output_max_v"][..],
         ),
+        // Each field valid, together overflowing: said before anything is written, naming the
+        // row (the writer blamed the output file's column).
+        (
+            "[adc]\nmin_v = 0.0\nmax_v = 1e308\n",
+            &["stage.toml", "non-finite", "row 1", "check them"][..],
+        ),
     ] {
         let stage = dir.path().join("stage.toml");
         std::fs::write(&stage, content).unwrap();

@@ -191,6 +191,24 @@ pub fn run(args: &Args, ctx: Context) -> Result<(), CliError> {
 
     let mut stage = Stage::new(&config, args.seed.unwrap_or(config.seed))?;
     let response = stage.run(command_v);
+    // The drive is finite (the reader refuses anything else): a non-finite response comes from
+    // the stage, whose fields each passed validation but together overflow. Said as such,
+    // naming the row, before anything is written.
+    for (name, values) in HEADER[2..].iter().zip([
+        &response.amplifier_v,
+        &response.true_position_um,
+        &response.measured_position_um,
+    ]) {
+        if let Some(k) = values.iter().position(|v| !v.is_finite()) {
+            return Err(CliError::input(format!(
+                "{stage_name} gives a non-finite {name} at row {} (t = {} s): its fields \
+                 overflow together (spans, gains, bandwidth or capacitance far beyond any \
+                 stage's); check them",
+                k + 1,
+                crate::number(time.get(k).copied().unwrap_or(f64::NAN)),
+            )));
+        }
+    }
 
     data::write_csv(
         &args.output,
