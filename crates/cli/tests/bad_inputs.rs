@@ -1463,7 +1463,7 @@ fn matrix() -> Vec<(Fixture, Case)> {
                 &f.arg("signal.csv"),
             ],
             1,
-            &["--amplitude", "sample", "1e15"],
+            &["--amplitude", "row 1", "1e15"],
         )
         .output(f.path("signal.csv"))
     });
