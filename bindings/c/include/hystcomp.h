@@ -1160,9 +1160,9 @@ int hystcomp_compensator_step(struct HystcompCompensator *h, double y_d, double 
  * `hystcomp_compensator_step`. `y_d` and `v` may be the same array (in place). With `len == 0`
  * nothing is done and the arrays may be NULL.
  *
- * Non-finite samples (and samples too large to normalise) hold the previous output; the whole signal is still processed and
- * `HYSTCOMP_STATUS_NON_FINITE_INPUT` is returned, with their count and first index in the
- * message.
+ * Non-finite samples (and samples too large to normalise) hold the previous output; the
+ * whole signal is still processed and `HYSTCOMP_STATUS_NON_FINITE_INPUT` is returned, with
+ * their count and first index in the message.
  *
  * # Safety
  * `h` must be a live handle or NULL; `y_d` must point to `len` readable doubles and `v` to

@@ -218,8 +218,7 @@ pub unsafe extern "C" fn hystcomp_compensator_step(
         if v_out.is_null() {
             return Err(Failure::null("v_out"));
         }
-        let held = c.inner.holds(y_d);
-        let v = c.inner.step(y_d);
+        let (v, held) = c.inner.step_held(y_d);
         // SAFETY: non-NULL (checked above, before the state moves), valid for a write (the
         // caller's contract).
         unsafe { v_out.write(v) };
@@ -239,9 +238,9 @@ pub unsafe extern "C" fn hystcomp_compensator_step(
 /// `hystcomp_compensator_step`. `y_d` and `v` may be the same array (in place). With `len == 0`
 /// nothing is done and the arrays may be NULL.
 ///
-/// Non-finite samples (and samples too large to normalise) hold the previous output; the whole signal is still processed and
-/// `HYSTCOMP_STATUS_NON_FINITE_INPUT` is returned, with their count and first index in the
-/// message.
+/// Non-finite samples (and samples too large to normalise) hold the previous output; the
+/// whole signal is still processed and `HYSTCOMP_STATUS_NON_FINITE_INPUT` is returned, with
+/// their count and first index in the message.
 ///
 /// # Safety
 /// `h` must be a live handle or NULL; `y_d` must point to `len` readable doubles and `v` to
@@ -257,12 +256,7 @@ pub unsafe extern "C" fn hystcomp_compensator_process(
         // SAFETY: a live handle or NULL (the caller's contract).
         let c = unsafe { handle(h, "compensator handle") }?;
         // SAFETY: `len` elements each, or NULL (the caller's contract).
-        let (count, first) = unsafe {
-            run_signal(y_d, v, len, |x| {
-                let held = c.inner.holds(x);
-                (c.inner.step(x), held)
-            })
-        }?;
+        let (count, first) = unsafe { run_signal(y_d, v, len, |x| c.inner.step_held(x)) }?;
         if count == 0 {
             Ok(())
         } else {

@@ -576,24 +576,29 @@ impl ScaledCompensator {
         self.inner.get_mut().reset();
     }
 
-    /// Whether [`ScaledCompensator::step`] holds its previous drive for `desired`: when its
-    /// normalised value is not finite (NaN or infinite, or finite but too large for the
-    /// model's scale, which overflows to infinity when normalised).
-    pub fn holds(&self, desired: f64) -> bool {
-        !self.desired.normalise(desired).is_finite()
-    }
-
     /// One sample: the drive for the desired position `desired` (physical units). With a
     /// vibration link the drive returned is for the desired position fed
     /// [`ScaledCompensator::preview`] samples earlier (streaming with a preview).
     #[inline]
     pub fn step(&mut self, desired: f64) -> f64 {
+        self.step_held(desired).0
+    }
+
+    /// [`ScaledCompensator::step`], and whether it held its previous drive for `desired`:
+    /// when its normalised value is not finite (NaN or infinite, or finite but too large for
+    /// the model's scale, which overflows to infinity when normalised).
+    #[inline]
+    pub fn step_held(&mut self, desired: f64) -> (f64, bool) {
+        let normalised = self.desired.normalise(desired);
         let v = self
             .control
-            .to_physical(self.inner.get_mut().step(self.desired.normalise(desired)));
+            .to_physical(self.inner.get_mut().step(normalised));
         // The normalised limits map onto the physical ones up to rounding; clamp once more so
         // that the physical output never leaves them, not even by an ulp.
-        v.clamp(self.limits.0, self.limits.1)
+        (
+            v.clamp(self.limits.0, self.limits.1),
+            !normalised.is_finite(),
+        )
     }
 
     /// A whole signal; refuses slices of different lengths. With a vibration link the signal
