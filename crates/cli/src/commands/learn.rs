@@ -370,18 +370,13 @@ fn write_state(path: &Path, state: &State) -> Result<(), CliError> {
 pub fn run(args: &Args, ctx: Context) -> Result<(), CliError> {
     let state_out = state_path(&args.output);
     let state_in = args.drive.as_deref().map(state_path);
-    // The state files are inputs and outputs too: the same rule applies to them.
-    Files::new()
-        .input("--desired", &args.desired)
-        .maybe_input("--drive", args.drive.as_ref())
-        .maybe_input("--measured", args.measured.as_ref())
-        .maybe_input("--model", args.model.as_ref())
-        .stage("--stage", args.stage.as_ref())
+    // The state files are inputs and outputs too: the same rule applies to them, beside the
+    // command's own files.
+    args.files()
         .maybe_input(
             "--drive's state file",
             state_in.as_ref().filter(|p| p.exists()),
         )
-        .output("--output", &args.output)
         .output("--output's state file", &state_out)
         .check()?;
     if args.simulate {
