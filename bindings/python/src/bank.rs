@@ -6,7 +6,6 @@ use std::path::PathBuf;
 use std::sync::{Mutex, MutexGuard};
 
 use hystcomp_io::bank::{Channel, MAX_CHANNELS, ModelSet, ModelSetError, ScaledBank};
-use hystcomp_io::model_file::ModelFile as IoModelFile;
 use numpy::{PyArray1, PyArrayMethods};
 use pyo3::exceptions::PyTypeError;
 use pyo3::prelude::*;
@@ -183,27 +182,24 @@ impl CompensatorBank {
                 }
                 let mut channels = Vec::with_capacity(list.len());
                 for (k, model) in list.into_iter().enumerate() {
-                    let name = match &model {
-                        ModelArg::Path(p) => p
-                            .file_stem()
-                            .map(|s| s.to_string_lossy().into_owned())
-                            .unwrap_or_else(|| format!("channel_{k}")),
-                        ModelArg::File(_) => format!("channel_{k}"),
+                    let (name, path) = match &model {
+                        ModelArg::Path(p) => (
+                            p.file_stem()
+                                .map(|s| s.to_string_lossy().into_owned())
+                                .unwrap_or_else(|| format!("channel_{k}")),
+                            p.display().to_string(),
+                        ),
+                        ModelArg::File(_) => (format!("channel_{k}"), String::new()),
                     };
-                    let model = match model {
-                        ModelArg::Path(path) => {
-                            IoModelFile::load(&path).map_err(|error| {
-                                // Named by its place in the list, as a set names its channels.
-                                set_error(ModelSetError::File {
-                                    path: path.display().to_string(),
-                                    channel: k,
-                                    name: name.clone(),
-                                    error,
-                                })
-                            })?
-                        }
-                        file => file.load()?,
-                    };
+                    // Named by its place in the list, as a set names its channels.
+                    let model = model.read().map_err(|error| {
+                        set_error(ModelSetError::File {
+                            path,
+                            channel: k,
+                            name: name.clone(),
+                            error,
+                        })
+                    })?;
                     channels.push(Channel { name, model });
                 }
                 // Two files of the same stem in different directories: number them instead.

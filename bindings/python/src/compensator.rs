@@ -5,7 +5,9 @@ use std::path::PathBuf;
 use std::sync::{Mutex, MutexGuard};
 
 use hystcomp_io::compensator::{Method, ScaledCompensator, UnstableDelay};
-use hystcomp_io::model_file::{Direction, ModelFile as IoModelFile, Scale as IoScale};
+use hystcomp_io::model_file::{
+    Direction, ModelFile as IoModelFile, ModelFileError, Scale as IoScale,
+};
 use numpy::PyArray1;
 use pyo3::prelude::*;
 
@@ -25,9 +27,15 @@ pub enum ModelArg<'py> {
 impl ModelArg<'_> {
     /// The model file: the one given, or read from the path.
     pub(crate) fn load(self) -> PyResult<IoModelFile> {
+        self.read().map_err(errors::model_file)
+    }
+
+    /// [`ModelArg::load`] with the reader's own error (for a caller that names the file its
+    /// own way).
+    pub(crate) fn read(self) -> Result<IoModelFile, ModelFileError> {
         match self {
             ModelArg::File(f) => Ok(f.inner.clone()),
-            ModelArg::Path(p) => IoModelFile::load(&p).map_err(errors::model_file),
+            ModelArg::Path(p) => IoModelFile::load(&p),
         }
     }
 }
