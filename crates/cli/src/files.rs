@@ -112,10 +112,21 @@ impl<'a> Files<'a> {
     /// Refuses outputs that are one of the inputs (or, for a directory, hold one), and
     /// outputs that are the same file as another output. Touches no file's contents.
     pub fn check(&self) -> Result<(), CliError> {
-        let inputs: Vec<(&str, &Path, Resolved)> = self
+        let any_file = self.outputs.iter().any(|(_, _, kind)| *kind == Kind::File);
+        // Each input directory's entries resolved once (an output file outside the directory
+        // may still be one of them through a link).
+        let inputs: Vec<(&str, &Path, Resolved, Entries)> = self
             .inputs
             .iter()
-            .map(|(option, path)| (*option, path.as_ref(), Resolved::new(path)))
+            .map(|(option, path)| {
+                let resolved = Resolved::new(path);
+                let entries = if any_file && resolved.directory {
+                    entries(path)
+                } else {
+                    Vec::new()
+                };
+                (*option, path.as_ref(), resolved, entries)
+            })
             .collect();
         let outputs: Vec<(&str, &Path, Kind, Resolved)> = self
             .outputs
@@ -123,12 +134,11 @@ impl<'a> Files<'a> {
             .map(|(option, path, kind)| (*option, *path, *kind, Resolved::new(path)))
             .collect();
         for (k, (output, out_path, kind, out)) in outputs.iter().enumerate() {
-            for (input, in_path, resolved_input) in &inputs {
+            for (input, in_path, resolved_input, entries) in &inputs {
                 // (An output inside the directory is refused below, with its own message.)
                 if *kind == Kind::File
-                    && resolved_input.directory
                     && !out.path.starts_with(&resolved_input.path)
-                    && let Some(entry) = entry_same_as(in_path, out)
+                    && let Some((entry, _)) = entries.iter().find(|(_, e)| e.same_file(out))
                 {
                     return Err(CliError::input(format!(
                         "{output} {} is the same file as {} in {input} {}, a directory the \
@@ -194,19 +204,28 @@ impl<'a> Files<'a> {
     }
 }
 
-/// The most entries of an input directory [`entry_same_as`] looks at: more than a model set
-/// may hold ([`hystcomp_io::bank::MAX_CHANNELS`]), which its reader refuses anyway.
+/// The most entries of an input directory [`entries`] looks at: more than a model set may
+/// hold ([`hystcomp_io::bank::MAX_CHANNELS`]), which its reader refuses anyway.
 const MAX_LISTED: usize = 1 << 17;
 
-/// An entry of the directory `dir` that is the same file as `out` (through a symbolic or hard
-/// link the directory holds: an output outside the directory can still be one of its inputs).
-fn entry_same_as(dir: &Path, out: &Resolved) -> Option<PathBuf> {
-    std::fs::read_dir(dir)
-        .ok()?
+/// A directory's entries, each with its resolved path.
+type Entries = Vec<(PathBuf, Resolved)>;
+
+/// The entries of the directory `dir`, each resolved (a symbolic or hard link the directory
+/// holds makes a file outside it one of its inputs); none when it cannot be listed.
+fn entries(dir: &Path) -> Entries {
+    let Ok(listing) = std::fs::read_dir(dir) else {
+        return Vec::new();
+    };
+    listing
         .take(MAX_LISTED)
         .filter_map(Result::ok)
-        .map(|entry| entry.path())
-        .find(|entry| Resolved::new(entry).same_file(out))
+        .map(|entry| {
+            let path = entry.path();
+            let resolved = Resolved::new(&path);
+            (path, resolved)
+        })
+        .collect()
 }
 
 /// A path as the file system resolves it.
