@@ -49,20 +49,25 @@ fn run_on_stage(dir: &Path, drive: &Path, measured: &Path, seed: u64) {
     std::fs::write(measured, text).unwrap();
 }
 
-/// desired.csv (one period of the paper's trajectory, 1 s) and drive_0.csv (Table 1's IHC).
-fn setup(dir: &Path) {
-    let desired = dir.join("desired.csv");
+/// The paper's trajectory ten times faster, `duration` s at 10 kHz, written to `path`.
+fn paper_signal(path: &Path, duration: &str) {
     let out = hystcomp(&[
         "signal",
         "paper",
         "--speed",
         "10",
         "--duration",
-        "1",
+        duration,
         "-o",
-        s(&desired),
+        s(path),
     ]);
     assert!(out.status.success(), "{}", stderr(&out));
+}
+
+/// desired.csv (one period of the paper's trajectory, 1 s) and drive_0.csv (Table 1's IHC).
+fn setup(dir: &Path) {
+    let desired = dir.join("desired.csv");
+    paper_signal(&desired, "1");
     let model = models().join("table1-plant.json");
     let drive = dir.join("drive_0.csv");
     let out = hystcomp(&[
@@ -383,17 +388,7 @@ fn bad_learning_inputs_are_refused_with_the_option_named() {
     // One trial's periods are bounded in memory (its drive and responses), not only the whole
     // run in time: 600 periods of 20 000 samples are refused before anything runs.
     let long = d.join("long.csv");
-    let out = hystcomp(&[
-        "signal",
-        "paper",
-        "--speed",
-        "10",
-        "--duration",
-        "2",
-        "-o",
-        s(&long),
-    ]);
-    assert!(out.status.success(), "{}", stderr(&out));
+    paper_signal(&long, "2");
     assert_fails(
         &[
             "learn",
