@@ -176,6 +176,65 @@ fn the_hardware_loop_learns_trial_after_trial_from_the_files_alone() {
     }
 }
 
+/// The state file names its drive by a checksum of the drive's values: a drive changed after
+/// its state was written (or a state left from another run) is refused, nothing written; a
+/// state file from before the checksum was kept is taken on trust.
+#[test]
+fn a_state_file_beside_another_drive_is_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    setup(d);
+    run_on_stage(d, &d.join("drive_0.csv"), &d.join("meas_0.csv"), 3);
+    let out = learn(d, 0, &[]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let state_path = d.join("drive_1.learn.json");
+    let state: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&state_path).unwrap()).unwrap();
+    assert!(state["drive_crc32"].is_u64(), "{state}");
+    run_on_stage(d, &d.join("drive_1.csv"), &d.join("meas_1.csv"), 4);
+
+    // One drive value changed by one part in a million: refused, naming both files.
+    let drive = d.join("drive_1.csv");
+    let original = std::fs::read_to_string(&drive).unwrap();
+    let mut lines: Vec<String> = original.lines().map(str::to_owned).collect();
+    let mut fields: Vec<String> = lines[5].split(',').map(str::to_owned).collect();
+    let v: f64 = fields[1].parse().unwrap();
+    fields[1] = format!("{:?}", v * (1.0 + 1e-6));
+    lines[5] = fields.join(",");
+    std::fs::write(&drive, lines.join("\n") + "\n").unwrap();
+    let before = std::fs::read(&state_path).unwrap();
+    let out = learn(d, 1, &[]);
+    assert!(!out.status.success());
+    let message = stderr(&out);
+    assert!(
+        message.contains("belongs to another drive") && message.contains("drive_1.csv"),
+        "{message}"
+    );
+    assert!(!d.join("drive_2.csv").exists() && !d.join("drive_2.learn.json").exists());
+    assert_eq!(
+        std::fs::read(&state_path).unwrap(),
+        before,
+        "the state is kept"
+    );
+
+    // The drive as written: accepted.
+    std::fs::write(&drive, &original).unwrap();
+    let out = learn(d, 1, &[]);
+    assert!(out.status.success(), "{}", stderr(&out));
+
+    // A state file without the checksum (written before it was kept): taken on trust.
+    let mut old: serde_json::Value = state.clone();
+    old.as_object_mut().unwrap().remove("drive_crc32");
+    std::fs::write(&state_path, serde_json::to_string(&old).unwrap()).unwrap();
+    std::fs::write(&drive, lines.join("\n") + "\n").unwrap();
+    let out = learn(d, 1, &[]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let next: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(d.join("drive_2.learn.json")).unwrap())
+            .unwrap();
+    assert_eq!(next["history"].as_array().unwrap().len(), 2, "{next}");
+}
+
 #[test]
 fn a_gain_too_high_is_stopped_with_exit_6_and_the_last_good_drive_kept() {
     let dir = tempfile::tempdir().unwrap();

@@ -3,8 +3,9 @@
 //!
 //! The state between trials is the drive file itself (the model run forward over it recovers
 //! the reference it followed; `hystcomp_learn::Learner::resume`) plus a small state file
-//! written atomically beside it (`DRIVE.learn.json`: every trial's indices, the best trial and
-//! the learning law), read back from beside `--drive` when present. The drive file's
+//! written atomically beside it, before the drive (`DRIVE.learn.json`: every trial's indices,
+//! the best trial, the learning law and a checksum of the drive's values, which must match
+//! the drive read), read back from beside `--drive` when present. The drive file's
 //! `best_drive_v` column holds the last good drive, which the divergence guard falls back to.
 
 use std::path::{Path, PathBuf};
@@ -159,6 +160,44 @@ struct State {
     stopped: Option<Status>,
     /// The law in force.
     law: LearningLaw,
+    /// [`drive_checksum`] of the drive this state belongs to (absent in files written before
+    /// it was kept: those are taken on trust).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    drive_crc32: Option<u32>,
+}
+
+/// The CRC-32 of a drive's values (each `f64` as its little-endian bytes, in order): the drive
+/// a state file belongs to. The drive file holds each value as the shortest text that parses
+/// back to it, so the values read back give the same checksum.
+fn drive_checksum(drive: &[f64]) -> u32 {
+    let mut hasher = crc32fast::Hasher::new();
+    for v in drive {
+        hasher.update(&v.to_le_bytes());
+    }
+    hasher.finalize()
+}
+
+/// Writes a trial's state file, then its drive file: each atomically, the state first, so that
+/// an interruption between the two never leaves a new drive beside a missing or stale state
+/// (the next trial would take it for a first drive, or for another trial); a new state beside
+/// an old drive is refused when read, by the drive's checksum.
+fn write_trial(
+    output: &Path,
+    state: &State,
+    time: &[f64],
+    learner: &hystcomp_learn::Learner,
+    best: &[f64],
+    model: &ModelFile,
+) -> Result<(), CliError> {
+    write_state(&state_path(output), state)?;
+    write_drive(
+        output,
+        time,
+        learner.drive(),
+        learner.reference(),
+        best,
+        model,
+    )
 }
 
 const STATE_FORMAT: &str = "hystcomp-learn-state";
@@ -461,6 +500,19 @@ fn trial(
                     state.version
                 )));
             }
+            if let Some(expected) = state.drive_crc32
+                && expected != drive_checksum(&drive)
+            {
+                return Err(CliError::input(format!(
+                    "{}: this state file belongs to another drive than the one read from {} \
+                     (its values' checksum differs: the drive file was changed, or another \
+                     column was read, or an earlier learn was interrupted between writing \
+                     the state and the drive). Give the drive it was written with, or remove \
+                     the state file to start the learning history afresh from this drive",
+                    path.display(),
+                    drive_path.display()
+                )));
+            }
             Some(state)
         }
         None => None,
@@ -498,14 +550,6 @@ fn trial(
     let update = learner.update(&measured).map_err(learn_error)?;
     let best = learner.best().map(|(_, d)| d.to_vec());
     let best_drive = best.unwrap_or_else(|| learner.drive().to_vec());
-    write_drive(
-        &args.output,
-        &time,
-        learner.drive(),
-        learner.reference(),
-        &best_drive,
-        &model,
-    )?;
     let stopped = matches!(update.status, Status::Diverged { .. });
     let state = State {
         format: STATE_FORMAT.into(),
@@ -515,8 +559,9 @@ fn trial(
         best_trial: learner.best().map(|(t, _)| t),
         stopped: stopped.then(|| update.status.clone()),
         law: learner.law().clone(),
+        drive_crc32: Some(drive_checksum(learner.drive())),
     };
-    write_state(state_out, &state)?;
+    write_trial(&args.output, &state, &time, &learner, &best_drive, &model)?;
     let report = TrialReport {
         desired: args.desired.display().to_string(),
         output: args.output.display().to_string(),
@@ -662,14 +707,6 @@ fn simulate(args: &Args, ctx: Context) -> Result<(), CliError> {
         .best()
         .map(|(_, d)| d.to_vec())
         .unwrap_or_else(|| learner.drive().to_vec());
-    write_drive(
-        &args.output,
-        &time,
-        learner.drive(),
-        learner.reference(),
-        &best,
-        &model,
-    )?;
     let last = trials.last().expect("at least one trial");
     let stopped = learner.is_stopped();
     let state = State {
@@ -680,8 +717,9 @@ fn simulate(args: &Args, ctx: Context) -> Result<(), CliError> {
         best_trial: learner.best().map(|(t, _)| t),
         stopped: stopped.then(|| last.update.status.clone()),
         law: learner.law().clone(),
+        drive_crc32: Some(drive_checksum(learner.drive())),
     };
-    write_state(&state_path(&args.output), &state)?;
+    write_trial(&args.output, &state, &time, &learner, &best, &model)?;
     if json {
         crate::print_json(&SimulationReport {
             desired: args.desired.display().to_string(),
