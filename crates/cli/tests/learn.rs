@@ -222,11 +222,36 @@ fn a_state_file_beside_another_drive_is_refused() {
     let out = learn(d, 1, &[]);
     assert!(out.status.success(), "{}", stderr(&out));
 
+    // A state left from another run beside this run's drive (as a learn cut off between its
+    // two writes leaves it): trial 1 learned again from another measurement gives another
+    // drive_2.csv; with the first run's state beside it, trial 2 is refused.
+    let first_state = std::fs::read(d.join("drive_2.learn.json")).unwrap();
+    run_on_stage(d, &drive, &d.join("meas_1.csv"), 5);
+    let out = learn(d, 1, &[]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    assert_ne!(
+        std::fs::read(d.join("drive_2.learn.json")).unwrap(),
+        first_state
+    );
+    std::fs::write(d.join("drive_2.learn.json"), &first_state).unwrap();
+    run_on_stage(d, &d.join("drive_2.csv"), &d.join("meas_2.csv"), 6);
+    let out = learn(d, 2, &[]);
+    assert!(!out.status.success());
+    assert!(
+        stderr(&out).contains("belongs to another drive") && stderr(&out).contains("Re-run"),
+        "{}",
+        stderr(&out)
+    );
+    assert!(!d.join("drive_3.csv").exists() && !d.join("drive_3.learn.json").exists());
+
     // A state file without the checksum (written before it was kept): taken on trust.
     let mut old: serde_json::Value = state.clone();
     old.as_object_mut().unwrap().remove("drive_crc32");
     std::fs::write(&state_path, serde_json::to_string(&old).unwrap()).unwrap();
     std::fs::write(&drive, lines.join("\n") + "\n").unwrap();
+    for stale in ["drive_2.csv", "drive_2.learn.json"] {
+        std::fs::remove_file(d.join(stale)).unwrap();
+    }
     let out = learn(d, 1, &[]);
     assert!(out.status.success(), "{}", stderr(&out));
     let next: serde_json::Value =

@@ -505,10 +505,12 @@ fn trial(
             {
                 return Err(CliError::input(format!(
                     "{}: this state file belongs to another drive than the one read from {} \
-                     (its values' checksum differs: the drive file was changed, or another \
-                     column was read, or an earlier learn was interrupted between writing \
-                     the state and the drive). Give the drive it was written with, or remove \
-                     the state file to start the learning history afresh from this drive",
+                     (its values' checksum differs: the drive file was changed or re-saved \
+                     with fewer digits, another column was read, or the learn that wrote \
+                     them was cut off between writing the state and the drive). Re-run the \
+                     learn that wrote them (its inputs are unchanged), or give the drive the \
+                     state was written with, or remove the state file to start the learning \
+                     history afresh from this drive",
                     path.display(),
                     drive_path.display()
                 )));
