@@ -385,7 +385,8 @@ pub(crate) struct Block<'a, T, const W: usize> {
     pub counters: &'a mut [[u64; W]],
     /// Whether the code stepping the block is compiled with AVX2 (set by `super::run`, a
     /// constant on each of its paths): then [`gather`] reads each lane's row with the
-    /// processor's gather instruction instead of lane by lane.
+    /// processor's gather instruction, or by selection from a single small table, instead of
+    /// lane by lane.
     pub hardware_gather: bool,
 }
 
@@ -452,10 +453,10 @@ impl<T: Real, const W: usize> Block<'_, T, W> {
 /// result is discarded ask for) reads their last row: the index is clamped to the tables'
 /// common length.
 ///
-/// One table of at most [`SELECT_ROWS`] rows is read by [`select_rows`]. Otherwise, with
-/// `hardware` (code compiled for AVX2, see [`Block::hardware_gather`]) and eight lanes of
-/// `f32` or `f64`, each table is read with one gather instruction (`vgatherdps`, two
-/// `vgatherdpd`); otherwise lane by lane (an extract, a load and an insert per lane and
+/// With `hardware` (code compiled for AVX2, see [`Block::hardware_gather`]), one table of at
+/// most [`SELECT_ROWS`] rows is read by [`select_rows`], and otherwise, with eight lanes of
+/// `f32` or `f64`, each table with one gather instruction (`vgatherdps`, two `vgatherdpd`).
+/// Everything else is read lane by lane (an extract, a load and an insert per lane and
 /// table). All three read the same values.
 #[inline(always)]
 pub(crate) fn gather<T: Real, const W: usize, const K: usize>(
@@ -478,7 +479,7 @@ pub(crate) fn gather<T: Real, const W: usize, const K: usize>(
         };
         *s = t;
     }
-    if n <= SELECT_ROWS && K == 1 {
+    if hardware && K == 1 && n <= SELECT_ROWS {
         return select_rows(sliced, index, last);
     }
     #[cfg(all(feature = "std", target_arch = "x86_64"))]
@@ -490,13 +491,15 @@ pub(crate) fn gather<T: Real, const W: usize, const K: usize>(
     lane_by_lane(sliced, index, last)
 }
 
-/// A single table of at most this many rows is read by [`select_rows`]. Measured with the
-/// bank probe on Zen 4 (AVX-512) at 10 operators, 4 096 channels: the two single-table reads
-/// of the walk (`prefix`, `inverse_alpha`) by selection instead of `vgatherdps` took the exact
-/// IHC from 15.8-16.4 to 14.1-14.2 ns per channel-step in f32 and from 26.0-27.0 to 24.2-24.7
-/// in f64, WIHC in f32 from 14.3-14.5 to 13.3 (f64 unchanged), the guarded IHC in f32 from
-/// 7.2 to 6.8-7.1. The walk's three tables at once stay gathered: selected too, f32 was no
-/// faster and f64 slower (WIHC 24.6 to 32 ns).
+/// On the paths with gather instructions, a single table of at most this many rows is read
+/// by [`select_rows`]. Measured with the bank probe on Zen 4 (AVX-512) at 10 operators, 4 096
+/// channels (figures in the README, Many channels): the walk's two single-table reads
+/// (`prefix`, `inverse_alpha`) by selection instead of `vgatherdps` took the exact IHC from
+/// about 16 to 14 ns per channel-step in f32 and from about 26 to 24.5 in f64. The walk's
+/// three tables at once stay gathered: selected too, f32 was no faster and f64 slower (exact
+/// WIHC 24.5 to 32 ns). The paths without gather instructions (SSE2, other processors, the
+/// microcontroller) keep reading lane by lane: there selection, a compare and a select per
+/// row, would be unmeasured extra work.
 const SELECT_ROWS: usize = 16;
 
 /// [`gather`] by passing over every row of the tables and keeping, in each lane, the row its
@@ -675,11 +678,13 @@ mod tests {
             .collect()
     }
 
-    /// Every way of reading (selection for one table of few rows, the gather instructions,
-    /// lane by lane) returns each lane's own row, the index clamped to the last row, on
-    /// tables of 1 to 40 rows on either side of `SELECT_ROWS`.
+    /// Every way of reading (selection, the gather instructions, lane by lane) returns each
+    /// lane's own row, the index clamped to the last row, on tables of 1 to 40 rows on either
+    /// side of `SELECT_ROWS`; an empty table reads zeros.
     #[test]
     fn every_reading_returns_each_lanes_row() {
+        let empty: [&[[f32; 8]]; 1] = [&[]];
+        assert_eq!(gather(empty, Lanes([3; 8]), false)[0].0, [0.0; 8]);
         let mut rng = ChaCha8Rng::seed_from_u64(16);
         for case in 0..400 {
             let rows = 1 + case % 40;
@@ -700,8 +705,11 @@ mod tests {
                 let [one] = gather([a.as_slice()], lanes, hardware);
                 assert_eq!(one.0, reference([a.as_slice()], index)[0], "rows {rows}");
                 let three = gather([a.as_slice(), b.as_slice(), c.as_slice()], lanes, hardware);
+                let selected =
+                    select_rows([a.as_slice(), b.as_slice(), c.as_slice()], lanes, rows - 1);
                 let expected = reference([a.as_slice(), b.as_slice(), c.as_slice()], index);
                 assert_eq!(three.map(|l| l.0), expected, "rows {rows}");
+                assert_eq!(selected.map(|l| l.0), expected, "rows {rows}");
             }
         }
     }
