@@ -17,6 +17,19 @@ fn write_input(path: &Path, rate_hz: f64, n: usize) {
     std::fs::write(path, text).unwrap();
 }
 
+/// `simulate --stage STAGE --drive DRIVE -o OUTPUT`.
+fn on_stage<'a>(stage: &'a Path, drive: &'a Path, output: &'a Path) -> [&'a str; 7] {
+    [
+        "simulate",
+        "--stage",
+        s(stage),
+        "--drive",
+        s(drive),
+        "-o",
+        s(output),
+    ]
+}
+
 fn read_output(path: &Path) -> (Vec<String>, Vec<Vec<f64>>) {
     let text = std::fs::read_to_string(path).unwrap();
     let mut lines = text.lines();
@@ -174,15 +187,7 @@ max_v = 3.0
 ",
     )
     .unwrap();
-    let args = [
-        "simulate",
-        "--stage",
-        s(&stage),
-        "--drive",
-        s(&input),
-        "-o",
-        s(&output),
-    ];
+    let args = on_stage(&stage, &input, &output);
     let out = hystcomp(&args);
     assert!(out.status.success(), "{}", stderr(&out));
     assert!(
@@ -233,18 +238,7 @@ fn bad_stage_file_is_refused_with_the_field_named() {
     ] {
         let stage = dir.path().join("stage.toml");
         std::fs::write(&stage, content).unwrap();
-        assert_fails(
-            &[
-                "simulate",
-                "--stage",
-                s(&stage),
-                "--drive",
-                s(&input),
-                "-o",
-                s(&output),
-            ],
-            fragments,
-        );
+        assert_fails(&on_stage(&stage, &input, &output), fragments);
         assert!(!output.exists());
     }
 }
@@ -411,15 +405,7 @@ fn the_stage_files_model_file_is_not_overwritten() {
     write_input(&input, 10_000.0, 100);
     let before = std::fs::read(&model).unwrap();
     assert_fails(
-        &[
-            "simulate",
-            "--stage",
-            s(&stage),
-            "--drive",
-            s(&input),
-            "-o",
-            s(&model),
-        ],
+        &on_stage(&stage, &input, &model),
         &["hysteresis.mpim.model_file"],
     );
     assert_eq!(std::fs::read(&model).unwrap(), before);
