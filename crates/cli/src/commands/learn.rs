@@ -180,16 +180,30 @@ fn drive_checksum(drive: &[f64]) -> u32 {
 /// Writes a trial's state file, then its drive file: each atomically, the state first, so that
 /// an interruption between the two never leaves a new drive beside a missing or stale state
 /// (the next trial would take it for a first drive, or for another trial); a new state beside
-/// an old drive is refused when read, by the drive's checksum.
+/// an old drive is refused when read, by the drive's checksum. The state is the learner's
+/// (history, best trial, law, the checksum of its drive) with the trial that comes next and
+/// the divergence guard's stop, if it stopped; the drive file's best drive is the best
+/// trial's, or the drive itself before there is one.
 fn write_trial(
     output: &Path,
-    state: &State,
-    time: &[f64],
     learner: &hystcomp_learn::Learner,
-    best: &[f64],
+    next_trial: usize,
+    stopped: Option<Status>,
+    time: &[f64],
     model: &ModelFile,
 ) -> Result<(), CliError> {
-    write_state(&state_path(output), state)?;
+    let state = State {
+        format: STATE_FORMAT.into(),
+        version: 1,
+        next_trial,
+        history: learner.history().to_vec(),
+        best_trial: learner.best().map(|(t, _)| t),
+        stopped,
+        law: learner.law().clone(),
+        drive_crc32: Some(drive_checksum(learner.drive())),
+    };
+    write_state(&state_path(output), &state)?;
+    let best = learner.best().map_or(learner.drive(), |(_, d)| d);
     write_drive(
         output,
         time,
@@ -550,20 +564,15 @@ fn trial(
             .map_err(learn_error)?;
     }
     let update = learner.update(&measured).map_err(learn_error)?;
-    let best = learner.best().map(|(_, d)| d.to_vec());
-    let best_drive = best.unwrap_or_else(|| learner.drive().to_vec());
     let stopped = matches!(update.status, Status::Diverged { .. });
-    let state = State {
-        format: STATE_FORMAT.into(),
-        version: 1,
-        next_trial: update.trial + 1,
-        history: learner.history().to_vec(),
-        best_trial: learner.best().map(|(t, _)| t),
-        stopped: stopped.then(|| update.status.clone()),
-        law: learner.law().clone(),
-        drive_crc32: Some(drive_checksum(learner.drive())),
-    };
-    write_trial(&args.output, &state, &time, &learner, &best_drive, &model)?;
+    write_trial(
+        &args.output,
+        &learner,
+        update.trial + 1,
+        stopped.then(|| update.status.clone()),
+        &time,
+        &model,
+    )?;
     let report = TrialReport {
         desired: args.desired.display().to_string(),
         output: args.output.display().to_string(),
@@ -705,23 +714,16 @@ fn simulate(args: &Args, ctx: Context) -> Result<(), CliError> {
     )
     .map_err(|e| CliError::input(e.to_string()))?;
     printed?;
-    let best = learner
-        .best()
-        .map(|(_, d)| d.to_vec())
-        .unwrap_or_else(|| learner.drive().to_vec());
     let last = trials.last().expect("at least one trial");
     let stopped = learner.is_stopped();
-    let state = State {
-        format: STATE_FORMAT.into(),
-        version: 1,
-        next_trial: last.update.trial + 1,
-        history: learner.history().to_vec(),
-        best_trial: learner.best().map(|(t, _)| t),
-        stopped: stopped.then(|| last.update.status.clone()),
-        law: learner.law().clone(),
-        drive_crc32: Some(drive_checksum(learner.drive())),
-    };
-    write_trial(&args.output, &state, &time, &learner, &best, &model)?;
+    write_trial(
+        &args.output,
+        &learner,
+        last.update.trial + 1,
+        stopped.then(|| last.update.status.clone()),
+        &time,
+        &model,
+    )?;
     if json {
         crate::print_json(&SimulationReport {
             desired: args.desired.display().to_string(),
