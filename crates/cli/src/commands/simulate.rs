@@ -118,20 +118,24 @@ fn min_max(values: &[f64]) -> serde_json::Value {
     serde_json::json!({ "min": lo, "max": hi })
 }
 
+/// The output's columns, named as [`HEADER`] names them, in order.
+fn columns<'a>(time: &'a [f64], response: &'a StageResponse) -> [(&'static str, &'a [f64]); 5] {
+    [
+        (HEADER[0], time),
+        (HEADER[1], &response.command_v),
+        (HEADER[2], &response.amplifier_v),
+        (HEADER[3], &response.true_position_um),
+        (HEADER[4], &response.measured_position_um),
+    ]
+}
+
 fn summary(
     args: &Args,
     config: &StageConfig,
     time: &[f64],
     response: &StageResponse,
 ) -> serde_json::Value {
-    let columns: [(&str, &[f64]); 5] = [
-        (HEADER[0], time),
-        (HEADER[1], &response.command_v),
-        (HEADER[2], &response.amplifier_v),
-        (HEADER[3], &response.true_position_um),
-        (HEADER[4], &response.measured_position_um),
-    ];
-    let ranges: serde_json::Map<String, serde_json::Value> = columns
+    let ranges: serde_json::Map<String, serde_json::Value> = columns(time, response)
         .iter()
         .map(|(name, values)| (name.to_string(), min_max(values)))
         .collect();
@@ -191,14 +195,11 @@ pub fn run(args: &Args, ctx: Context) -> Result<(), CliError> {
 
     let mut stage = Stage::new(&config, args.seed.unwrap_or(config.seed))?;
     let response = stage.run(command_v);
-    // The drive is finite (the reader refuses anything else): a non-finite response comes from
-    // the stage, whose fields each passed validation but together overflow. Said as such,
-    // naming the row, before anything is written.
-    for (name, values) in HEADER[2..].iter().zip([
-        &response.amplifier_v,
-        &response.true_position_um,
-        &response.measured_position_um,
-    ]) {
+    // The time and the drive are finite (the reader refuses anything else): a non-finite
+    // response comes from the stage, whose fields each passed validation but together
+    // overflow. Said as such, naming the row, before anything is written.
+    let output = columns(time, &response);
+    for (name, values) in &output[2..] {
         if let Some(k) = values.iter().position(|v| !v.is_finite()) {
             return Err(CliError::input(format!(
                 "{stage_name} gives a non-finite {name} at row {} (t = {} s): its fields \
@@ -210,18 +211,8 @@ pub fn run(args: &Args, ctx: Context) -> Result<(), CliError> {
         }
     }
 
-    data::write_csv(
-        &args.output,
-        &HEADER,
-        &[
-            time,
-            &response.command_v,
-            &response.amplifier_v,
-            &response.true_position_um,
-            &response.measured_position_um,
-        ],
-    )
-    .map_err(data_error)?;
+    data::write_csv(&args.output, &HEADER, &output.map(|(_, values)| values))
+        .map_err(data_error)?;
 
     if ctx.json {
         let document = summary(args, &config, time, &response);
