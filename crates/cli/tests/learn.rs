@@ -18,6 +18,11 @@ fn column(path: &Path, name: &str) -> Vec<f64> {
         .remove(0)
 }
 
+/// A JSON file (a learn state file) as a value.
+fn read_json(path: &Path) -> serde_json::Value {
+    serde_json::from_str(&std::fs::read_to_string(path).unwrap()).unwrap()
+}
+
 /// Plays `drive` (its `drive_v`) twice on the built-in stage from rest and writes the second
 /// period's measurement to `measured` (time_s, measured_um).
 fn run_on_stage(dir: &Path, drive: &Path, measured: &Path, seed: u64) {
@@ -130,11 +135,7 @@ fn the_hardware_loop_learns_trial_after_trial_from_the_files_alone() {
                 < report["indices"]["e_rms_percent"].as_f64().unwrap()
         );
         e_rms.push(report["indices"]["e_rms_percent"].as_f64().unwrap());
-        let state: serde_json::Value = serde_json::from_str(
-            &std::fs::read_to_string(dir.path().join(format!("drive_{}.learn.json", k + 1)))
-                .unwrap(),
-        )
-        .unwrap();
+        let state = read_json(&dir.path().join(format!("drive_{}.learn.json", k + 1)));
         assert_eq!(
             state["history"].as_array().unwrap().len(),
             k + 1,
@@ -188,8 +189,7 @@ fn a_state_file_beside_another_drive_is_refused() {
     let out = learn(d, 0, &[]);
     assert!(out.status.success(), "{}", stderr(&out));
     let state_path = d.join("drive_1.learn.json");
-    let state: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(&state_path).unwrap()).unwrap();
+    let state = read_json(&state_path);
     assert!(state["drive_crc32"].is_u64(), "{state}");
     run_on_stage(d, &d.join("drive_1.csv"), &d.join("meas_1.csv"), 4);
 
@@ -254,9 +254,7 @@ fn a_state_file_beside_another_drive_is_refused() {
     }
     let out = learn(d, 1, &[]);
     assert!(out.status.success(), "{}", stderr(&out));
-    let next: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(d.join("drive_2.learn.json")).unwrap())
-            .unwrap();
+    let next = read_json(&d.join("drive_2.learn.json"));
     assert_eq!(next["history"].as_array().unwrap().len(), 2, "{next}");
 }
 
@@ -533,10 +531,7 @@ fn a_model_in_millivolts_learns_trial_after_trial() {
             s(&d.join(format!("mv_{}.csv", k + 1))),
         ]);
         assert!(out.status.success(), "trial {k}: {}", stderr(&out));
-        let state: serde_json::Value = serde_json::from_str(
-            &std::fs::read_to_string(d.join(format!("mv_{}.learn.json", k + 1))).unwrap(),
-        )
-        .unwrap();
+        let state = read_json(&d.join(format!("mv_{}.learn.json", k + 1)));
         assert!(state["best_trial"].is_u64(), "{state}");
         assert_eq!(
             column(&d.join(format!("mv_{}.csv", k + 1)), "best_drive_mv").len(),
