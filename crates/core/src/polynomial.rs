@@ -160,6 +160,23 @@ impl<T: Real> InputPolynomial<T> {
         p * x
     }
 
+    /// `h''(x) = g''(x)`: `sum_{j >= 2} j (j - 1) c_j x^(j - 2)` by Horner's rule from the
+    /// top (`6 a1 x` for the paper's cubic), for the root finder's Halley steps.
+    #[inline]
+    pub(crate) fn remainder_curvature(&self, x: T) -> T {
+        if self.odd_cubic {
+            return T::from_f64(6.0) * self.a1() * x;
+        }
+        self.coefficients()
+            .iter()
+            .enumerate()
+            .skip(1)
+            .rev()
+            .fold(T::zero(), |p, (i, &c)| {
+                p * x + T::from_f64(((i + 1) * i) as f64) * c
+            })
+    }
+
     /// `sum_{j >= 2} c_j x^(j - 2)` (Horner), so that `h(x) = x^2` times it.
     #[inline(always)]
     fn higher_horner(&self, x: T) -> T {

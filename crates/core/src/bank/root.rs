@@ -13,6 +13,8 @@ pub(crate) trait LaneRemainder<T: Real, const W: usize>: Copy {
     fn with_linear(self, x: Lanes<T, W>, c: Lanes<T, W>) -> Lanes<T, W>;
     /// `h'(x) + c`.
     fn slope_with_linear(self, x: Lanes<T, W>, c: Lanes<T, W>) -> Lanes<T, W>;
+    /// `h''(x)`.
+    fn curvature(self, x: Lanes<T, W>) -> Lanes<T, W>;
     /// `sum |c_j x^j|` over the terms of `h`.
     fn size(self, x: Lanes<T, W>) -> Lanes<T, W>;
     /// `g(x) = h(x) + a2 x` as `crate::InputPolynomial::value` evaluates it (DIHC's eq. (10)).
@@ -35,6 +37,10 @@ impl<T: Real, const W: usize> LaneRemainder<T, W> for CubicLanes<T, W> {
     #[inline(always)]
     fn slope_with_linear(self, x: Lanes<T, W>, c: Lanes<T, W>) -> Lanes<T, W> {
         Lanes::splat(T::from_f64(3.0)) * self.0 * x * x + c
+    }
+    #[inline(always)]
+    fn curvature(self, x: Lanes<T, W>) -> Lanes<T, W> {
+        Lanes::splat(T::from_f64(6.0)) * self.0 * x
     }
     #[inline(always)]
     fn size(self, x: Lanes<T, W>) -> Lanes<T, W> {
@@ -112,6 +118,18 @@ impl<T: Real, const W: usize> PolynomialLanes<T, W> {
         p * x
     }
 
+    /// The general remainder's curvature `sum_{j >= 2} j (j - 1) c_j x^(j - 2)`.
+    #[inline(always)]
+    fn general_curvature(&self, x: Lanes<T, W>) -> Lanes<T, W> {
+        let mut p = Lanes::zero();
+        for (k, &c) in self.higher().iter().enumerate().rev() {
+            let i = k + 1;
+            let term = Lanes::splat(T::from_f64(((i + 1) * i) as f64)) * c;
+            p = (p * x + term).or_keep(self.has(i), p);
+        }
+        p
+    }
+
     #[inline(always)]
     fn general_size(&self, x: Lanes<T, W>) -> Lanes<T, W> {
         let mut power = x * x;
@@ -141,6 +159,11 @@ impl<T: Real, const W: usize> LaneRemainder<T, W> for PolynomialLanes<T, W> {
         cubic.or_keep(self.odd_cubic, self.general_slope(x) + c)
     }
     #[inline(always)]
+    fn curvature(self, x: Lanes<T, W>) -> Lanes<T, W> {
+        let cubic = CubicLanes(self.a1()).curvature(x);
+        cubic.or_keep(self.odd_cubic, self.general_curvature(x))
+    }
+    #[inline(always)]
     fn size(self, x: Lanes<T, W>) -> Lanes<T, W> {
         let cubic = CubicLanes(self.a1()).size(x);
         cubic.or_keep(self.odd_cubic, self.general_size(x))
@@ -150,6 +173,26 @@ impl<T: Real, const W: usize> LaneRemainder<T, W> for PolynomialLanes<T, W> {
         let cubic = CubicLanes(self.a1()).input_function(x, a2);
         cubic.or_keep(self.odd_cubic, (self.higher_horner(x) * x + a2) * x)
     }
+}
+
+/// `crate::solve::inverse_step_slope` in every lane.
+#[inline(always)]
+fn inverse_step_slope<T: Real, R: LaneRemainder<T, W>, const W: usize>(
+    h: R,
+    x: Lanes<T, W>,
+    c1: Lanes<T, W>,
+    f: Lanes<T, W>,
+    halley: bool,
+) -> Lanes<T, W> {
+    let slope = h.slope_with_linear(x, c1);
+    if !halley {
+        return Lanes::splat(T::one()) / slope;
+    }
+    let twice = slope + slope;
+    let newton = twice * slope;
+    let corrected = newton - f * h.curvature(x);
+    let denominator = corrected.or_keep(corrected.gt(slope * slope), newton);
+    twice / denominator
 }
 
 /// `crate::solve::increasing_root` in every lane of `active`: the root in `[lo, hi]` of
@@ -179,17 +222,18 @@ pub(crate) fn increasing_root<T: Real, R: LaneRemainder<T, W>, const W: usize>(
     }
     let half = Lanes::splat(T::from_f64(0.5));
     let chord_gain = Lanes::splat(T::from_f64(1e-3));
-    let tolerance = Lanes::splat(T::from_f64(1e-13).max(T::epsilon() * T::from_f64(8.0)));
+    let tolerance = Lanes::splat(crate::solve::tolerance::<T>());
+    let halley = crate::solve::halley_steps::<T>();
     let one = Lanes::splat(T::one());
     let from_lo = (-f_lo).le(f_hi);
     let mut x = lo.or_keep(from_lo, hi);
     let mut f = f_lo.or_keep(from_lo, f_hi);
-    let mut inverse_slope = one / h.slope_with_linear(x, c1);
+    let mut inverse_slope = inverse_step_slope(h, x, c1, f, halley);
     let mut refresh = Mask::splat(false);
     for _ in 0..crate::solve::MAX_ITERATIONS {
         let running = !done;
         if (refresh & running).any() {
-            inverse_slope = (one / h.slope_with_linear(x, c1)).or_keep(refresh, inverse_slope);
+            inverse_slope = inverse_step_slope(h, x, c1, f, halley).or_keep(refresh, inverse_slope);
         }
         let mut next = x - f * inverse_slope;
         let inside = next.gt(lo) & next.lt(hi);
@@ -214,8 +258,9 @@ pub(crate) fn increasing_root<T: Real, R: LaneRemainder<T, W>, const W: usize>(
         if done.all() {
             return result;
         }
-        // A fresh Newton slope unless the chord step cut the residual by 1e3 (NaN: refresh).
-        refresh = f_next.abs().gt(chord_gain * f.abs()) | f_next.is_nan();
+        // A fresh slope for Halley's steps; for Newton's unless the chord step cut the
+        // residual by 1e3 (NaN: refresh).
+        refresh = f_next.abs().gt(chord_gain * f.abs()) | f_next.is_nan() | Mask::splat(halley);
         x = next;
         f = f_next;
     }
