@@ -258,6 +258,38 @@ fn a_state_file_beside_another_drive_is_refused() {
     assert_eq!(next["history"].as_array().unwrap().len(), 2, "{next}");
 }
 
+/// A drive file that would be refused (here a column name with a line break, from a model's
+/// unit) is refused before the state file is written: no state without its drive.
+#[test]
+fn a_drive_refused_before_it_is_written_leaves_no_state_behind() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    setup(d);
+    run_on_stage(d, &d.join("drive_0.csv"), &d.join("meas_0.csv"), 3);
+    let mut model = ModelFile::load(&models().join("table1-plant.json")).unwrap();
+    model.input.unit = "V\nper stack".into();
+    let model_path = d.join("plant-odd-unit.json");
+    model.save(&model_path).unwrap();
+    let out = hystcomp(&[
+        "learn",
+        "--desired",
+        s(&d.join("desired.csv")),
+        "--drive",
+        s(&d.join("drive_0.csv")),
+        "--measured",
+        s(&d.join("meas_0.csv")),
+        "--model",
+        s(&model_path),
+        "-o",
+        s(&d.join("drive_1.csv")),
+    ]);
+    assert!(!out.status.success());
+    assert!(stderr(&out).contains("line break"), "{}", stderr(&out));
+    for never in ["drive_1.csv", "drive_1.learn.json"] {
+        assert!(!d.join(never).exists(), "{never} was written");
+    }
+}
+
 #[test]
 fn a_gain_too_high_is_stopped_with_exit_6_and_the_last_good_drive_kept() {
     let dir = tempfile::tempdir().unwrap();

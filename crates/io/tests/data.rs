@@ -11,7 +11,7 @@ use std::path::PathBuf;
 use hystcomp_io::data::{
     Column, DataError, Delimiter, Header, MAX_MAGNITUDE, ReadOptions, RowRange, check_finite,
     check_min_samples, check_not_constant, check_same_length, check_time_increasing,
-    mean_time_step, read_columns, write_csv, write_delimited,
+    encode_delimited, mean_time_step, read_columns, write_csv, write_delimited,
 };
 use proptest::prelude::*;
 
@@ -80,6 +80,11 @@ proptest! {
         };
         let slices: Vec<&[f64]> = table.iter().map(Vec::as_slice).collect();
         write_delimited(&path, &header, &slices, delimiter).expect("writing");
+        // The encoding alone is the file's bytes, and writes nothing.
+        let elsewhere = dir.path().join("encoded-only.txt");
+        let encoded = encode_delimited(&elsewhere, &header, &slices, delimiter).expect("encoding");
+        prop_assert_eq!(&encoded, &fs::read(&path).expect("the written file"));
+        prop_assert!(!elsewhere.exists());
 
         let options = if auto_detect {
             ReadOptions::default()
@@ -801,6 +806,8 @@ fn header_names_that_would_not_read_back_are_refused() {
         let columns = vec![column; if header.len() == 2 { 1 } else { header.len() }];
         let error = write_delimited(&path, &header, &columns, delimiter).expect_err(part);
         assert!(matches!(error, DataError::InvalidWrite { .. }), "{error:?}");
+        let encoded = encode_delimited(&path, &header, &columns, delimiter).expect_err(part);
+        assert_eq!(encoded.to_string(), error.to_string());
         assert!(error.is_output());
         assert_contains(&error.to_string(), &["names.csv", part]);
     }

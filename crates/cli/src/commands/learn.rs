@@ -180,7 +180,9 @@ fn drive_checksum(drive: &[f64]) -> u32 {
 /// Writes a trial's state file, then its drive file: each atomically, the state first, so that
 /// an interruption between the two never leaves a new drive beside a missing or stale state
 /// (the next trial would take it for a first drive, or for another trial); a new state beside
-/// an old drive is refused when read, by the drive's checksum. The state is the learner's
+/// an old drive is refused when read, by the drive's checksum. The drive file's text is made
+/// (and checked: its column names, its values) before the state is written, so that only a
+/// failing disk, not a refused drive, can stop the second write. The state is the learner's
 /// (history, best trial, law, the checksum of its drive) with the trial that comes next and
 /// the divergence guard's stop, if it stopped; the drive file's best drive is the best
 /// trial's, or the drive itself before there is one.
@@ -202,16 +204,17 @@ fn write_trial(
         law: learner.law().clone(),
         drive_crc32: Some(drive_checksum(learner.drive())),
     };
-    write_state(&state_path(output), &state)?;
     let best = learner.best().map_or(learner.drive(), |(_, d)| d);
-    write_drive(
+    let drive = encode_drive(
         output,
         time,
         learner.drive(),
         learner.reference(),
         best,
         model,
-    )
+    )?;
+    write_state(&state_path(output), &state)?;
+    hystcomp_io::atomic::write_atomic(output, &drive).map_err(|e| CliError::output(e.to_string()))
 }
 
 const STATE_FORMAT: &str = "hystcomp-learn-state";
@@ -394,18 +397,20 @@ fn law_line(law: &LearningLaw) -> String {
     )
 }
 
-fn write_drive(
+/// The drive file's text: time, drive, reference and best drive, the columns named in the
+/// model's units.
+fn encode_drive(
     path: &Path,
     time: &[f64],
     drive: &[f64],
     reference: &[f64],
     best: &[f64],
     model: &ModelFile,
-) -> Result<(), CliError> {
+) -> Result<Vec<u8>, CliError> {
     let drive_name = format!("drive_{}", model.input.unit.to_lowercase());
     let reference_name = format!("reference_{}", model.output.unit);
     let best_name = format!("best_drive_{}", model.input.unit.to_lowercase());
-    data::write_csv(
+    data::encode_csv(
         path,
         &["time_s", &drive_name, &reference_name, &best_name],
         &[time, drive, reference, best],
@@ -547,7 +552,7 @@ fn trial(
             )));
         }
         // The best earlier trial's drive is the drive file's best_drive_UNIT column (the
-        // model's voltage unit, as `write_drive` names it).
+        // model's voltage unit, as `encode_drive` names it).
         let best_name = format!("best_drive_{}", model.input.unit.to_lowercase());
         let best_drive = match state.best_trial {
             Some(_) => Some(read_aligned(

@@ -84,7 +84,7 @@ pub use checks::{
 };
 pub use error::DataError;
 pub use level5::{MAX_MAT_BYTES, MAX_MAT_VALUES};
-pub use write::{write_csv, write_delimited};
+pub use write::{encode_csv, encode_delimited, write_csv, write_delimited};
 
 use std::fmt;
 use std::path::{Path, PathBuf};

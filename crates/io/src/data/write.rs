@@ -45,6 +45,28 @@ pub fn write_delimited(
     columns: &[&[f64]],
     delimiter: Delimiter,
 ) -> Result<(), DataError> {
+    let contents = encode_delimited(path, header, columns, delimiter)?;
+    crate::atomic::write_atomic(path, &contents).map_err(|source| DataError::Write {
+        path: path.to_owned(),
+        source,
+    })
+}
+
+/// The bytes [`write_csv`] would write to `path`, with every check it makes, and nothing
+/// written (`path` only names the errors): for a command that writes two files and must
+/// know both can be written before it replaces the first.
+pub fn encode_csv(path: &Path, header: &[&str], columns: &[&[f64]]) -> Result<Vec<u8>, DataError> {
+    encode_delimited(path, header, columns, Delimiter::Comma)
+}
+
+/// The bytes [`write_delimited`] would write to `path`, with every check it makes (`path`
+/// only names the errors).
+pub fn encode_delimited(
+    path: &Path,
+    header: &[&str],
+    columns: &[&[f64]],
+    delimiter: Delimiter,
+) -> Result<Vec<u8>, DataError> {
     let invalid = |reason: String| DataError::InvalidWrite {
         path: path.to_owned(),
         reason,
@@ -115,13 +137,9 @@ pub fn write_delimited(
         }
         writer.write_record(&fields).map_err(write_error)?;
     }
-    let contents = writer
+    writer
         .into_inner()
-        .map_err(|error| write_error(error.into_error().into()))?;
-    crate::atomic::write_atomic(path, &contents).map_err(|source| DataError::Write {
-        path: path.to_owned(),
-        source,
-    })
+        .map_err(|error| write_error(error.into_error().into()))
 }
 
 /// Why header names would not read back, if they would not.
