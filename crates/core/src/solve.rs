@@ -210,10 +210,12 @@ mod tests {
                 .expect("finite");
         }
         let degree = 1 + (rng.random::<f64>() * MAX_INPUT_DEGREE as f64) as usize;
-        let c: Vec<f64> = (0..degree.min(MAX_INPUT_DEGREE))
-            .map(|_| 2.0 * rng.random::<f64>() - 1.0)
-            .collect();
-        InputPolynomial::new(&c).expect("finite, 1 to 9 coefficients")
+        let mut c = [0.0; MAX_INPUT_DEGREE];
+        for c in c.iter_mut() {
+            *c = 2.0 * rng.random::<f64>() - 1.0;
+        }
+        InputPolynomial::new(&c[..degree.min(MAX_INPUT_DEGREE)])
+            .expect("finite, 1 to 9 coefficients")
     }
 
     /// `h''(x)` term by term with `powi`: the plain reference.
