@@ -89,6 +89,30 @@ fn setup(dir: &Path) {
     assert!(out.status.success(), "{}", stderr(&out));
 }
 
+/// `learn` for one trial on hardware: `dir`'s desired.csv, `drive` and `measured`, `model`,
+/// `-o output`.
+fn trial_args<'a>(
+    dir: &Path,
+    drive: &'a Path,
+    measured: &'a Path,
+    model: &'a Path,
+    output: &'a Path,
+) -> [&'a str; 11] {
+    [
+        "learn",
+        "--desired",
+        s(&dir.join("desired.csv")).to_owned().leak(),
+        "--drive",
+        s(drive),
+        "--measured",
+        s(measured),
+        "--model",
+        s(model),
+        "-o",
+        s(output),
+    ]
+}
+
 fn learn(dir: &Path, k: usize, extra: &[&str]) -> std::process::Output {
     let model = models().join("table1-plant.json");
     let (drive, measured, next) = (
@@ -96,20 +120,8 @@ fn learn(dir: &Path, k: usize, extra: &[&str]) -> std::process::Output {
         dir.join(format!("meas_{k}.csv")),
         dir.join(format!("drive_{}.csv", k + 1)),
     );
-    let mut args = vec![
-        "--json",
-        "learn",
-        "--desired",
-        s(&dir.join("desired.csv")).to_owned().leak(),
-        "--drive",
-        s(&drive).to_owned().leak(),
-        "--measured",
-        s(&measured).to_owned().leak(),
-        "--model",
-        s(&model).to_owned().leak(),
-        "-o",
-        s(&next).to_owned().leak(),
-    ];
+    let mut args = vec!["--json"];
+    args.extend(trial_args(dir, &drive, &measured, &model, &next));
     args.extend(extra);
     hystcomp(&args)
 }
@@ -153,19 +165,14 @@ fn the_hardware_loop_learns_trial_after_trial_from_the_files_alone() {
         20,
     );
     let model = models().join("table1-plant.json");
-    let out = hystcomp(&[
-        "learn",
-        "--desired",
-        s(&dir.path().join("desired.csv")),
-        "--drive",
-        s(&dir.path().join("drive_4.csv")),
-        "--measured",
-        s(&dir.path().join("meas_4.csv")),
-        "--model",
-        s(&model),
-        "-o",
-        s(&dir.path().join("drive_5.csv")),
-    ]);
+    let d = dir.path();
+    let out = hystcomp(&trial_args(
+        d,
+        &d.join("drive_4.csv"),
+        &d.join("meas_4.csv"),
+        &model,
+        &d.join("drive_5.csv"),
+    ));
     let text = stdout(&out);
     for fragment in [
         "trial 4: e_rms = ",
@@ -270,19 +277,13 @@ fn a_drive_refused_before_it_is_written_leaves_no_state_behind() {
     model.input.unit = "V\nper stack".into();
     let model_path = d.join("plant-odd-unit.json");
     model.save(&model_path).unwrap();
-    let out = hystcomp(&[
-        "learn",
-        "--desired",
-        s(&d.join("desired.csv")),
-        "--drive",
-        s(&d.join("drive_0.csv")),
-        "--measured",
-        s(&d.join("meas_0.csv")),
-        "--model",
-        s(&model_path),
-        "-o",
-        s(&d.join("drive_1.csv")),
-    ]);
+    let out = hystcomp(&trial_args(
+        d,
+        &d.join("drive_0.csv"),
+        &d.join("meas_0.csv"),
+        &model_path,
+        &d.join("drive_1.csv"),
+    ));
     assert!(!out.status.success());
     assert!(stderr(&out).contains("line break"), "{}", stderr(&out));
     for never in ["drive_1.csv", "drive_1.learn.json"] {
@@ -381,19 +382,13 @@ fn bad_learning_inputs_are_refused_with_the_option_named() {
     let d = dir.path();
     let model = models().join("table1-plant.json");
     let base = |extra: &[&str], output: &Path| {
-        let mut a: Vec<String> = [
-            "learn",
-            "--desired",
-            s(&d.join("desired.csv")),
-            "--drive",
-            s(&d.join("drive_0.csv")),
-            "--measured",
-            s(&d.join("meas_0.csv")),
-            "--model",
-            s(&model),
-            "-o",
-            s(output),
-        ]
+        let mut a: Vec<String> = trial_args(
+            d,
+            &d.join("drive_0.csv"),
+            &d.join("meas_0.csv"),
+            &model,
+            output,
+        )
         .iter()
         .map(|x| x.to_string())
         .collect();
@@ -423,19 +418,13 @@ fn bad_learning_inputs_are_refused_with_the_option_named() {
     let text = std::fs::read_to_string(d.join("meas_0.csv")).unwrap();
     let short: String = text.lines().take(500).map(|l| format!("{l}\n")).collect();
     std::fs::write(d.join("short.csv"), short).unwrap();
-    let a: Vec<String> = [
-        "learn",
-        "--desired",
-        s(&d.join("desired.csv")),
-        "--drive",
-        s(&d.join("drive_0.csv")),
-        "--measured",
-        s(&d.join("short.csv")),
-        "--model",
-        s(&model),
-        "-o",
-        s(&out),
-    ]
+    let a: Vec<String> = trial_args(
+        d,
+        &d.join("drive_0.csv"),
+        &d.join("short.csv"),
+        &model,
+        &out,
+    )
     .iter()
     .map(|x| x.to_string())
     .collect();
@@ -549,19 +538,13 @@ fn a_model_in_millivolts_learns_trial_after_trial() {
     ]);
     assert!(out.status.success(), "{}", stderr(&out));
     for k in 0..2 {
-        let out = hystcomp(&[
-            "learn",
-            "--desired",
-            s(&d.join("desired.csv")),
-            "--drive",
-            s(&d.join(format!("mv_{k}.csv"))),
-            "--measured",
-            s(&d.join("meas_0.csv")),
-            "--model",
-            s(&model_path),
-            "-o",
-            s(&d.join(format!("mv_{}.csv", k + 1))),
-        ]);
+        let out = hystcomp(&trial_args(
+            d,
+            &d.join(format!("mv_{k}.csv")),
+            &d.join("meas_0.csv"),
+            &model_path,
+            &d.join(format!("mv_{}.csv", k + 1)),
+        ));
         assert!(out.status.success(), "trial {k}: {}", stderr(&out));
         let state = read_json(&d.join(format!("mv_{}.learn.json", k + 1)));
         assert!(state["best_trial"].is_u64(), "{state}");
