@@ -220,6 +220,25 @@ impl<T: Real, B: Buffer<T>> PlayBank<T, B> {
             .fold(self.inverse_a, |least, &q| least.min(q))
     }
 
+    /// `|a| + sum_i |b_i|`: with [`PlayBank::reach_sum`], a bound on the size of the terms of
+    /// `a x + sum_i b_i F_{r_i}[x]` at an input `x` (each `|F_{r_i}[x]| <= |x| + r_i`), the
+    /// scale of its rounding.
+    pub fn slope_sum(&self) -> T {
+        self.weights
+            .as_ref()
+            .iter()
+            .fold(self.a.abs(), |sum, &b| sum + b.abs())
+    }
+
+    /// `sum_i |b_i r_i|` (see [`PlayBank::slope_sum`]).
+    pub fn reach_sum(&self) -> T {
+        self.weights
+            .as_ref()
+            .iter()
+            .zip(self.thresholds.as_ref())
+            .fold(T::zero(), |sum, (&b, &r)| sum + (b * r).abs())
+    }
+
     /// The last input fed.
     pub fn input(&self) -> T {
         self.input

@@ -10,7 +10,8 @@ use super::play::{
 };
 use super::root::{LaneRemainder, increasing_root};
 use super::run::{BankKernel, BlockKernel, run};
-use super::storage::{BankStorage, Block, OperatorTables, PlantRows};
+use super::storage::{BankStorage, Block, NON_FINITE, OperatorTables, PlantRows};
+use super::within::{LastInput, proven_within};
 use super::{BankError, LANES};
 use crate::{Buffer, Ihc, Mpim, OutputLimits, Real, SolveMode};
 
@@ -284,6 +285,72 @@ impl PlantKernel<IhcMethod> {
         state.memory_sum = sum.or_keep(lanes, state.memory_sum);
     }
 
+    /// The plain delayed loop's sample in one pass over the operators (as the DIHC's), when
+    /// [`proven_within`] proves every active lane's `v = P1^{-1}[w]` within its limits before
+    /// the evaluation and every active lane evaluates directly; `None`, the block unchanged,
+    /// otherwise. The same bits as the two passes of [`Self::step_with`]: the pass feeding
+    /// `w` computes the sum the first of those would, and `v` is within the limits.
+    #[inline(always)]
+    fn delayed_in_one_pass<T: Real, R: LaneRemainder<T, W>, const W: usize>(
+        &self,
+        block: &mut Block<'_, T, W>,
+        desired: L<T, W>,
+        remainder: R,
+    ) -> Option<L<T, W>> {
+        let rows = &self.rows;
+        let active = desired.is_finite();
+        if !active.any() {
+            return None;
+        }
+        let operators = block.count(PlantRows::OPERATORS);
+        let (min, max) = (
+            block.get(rows.scalar(PlantRows::LIMIT_MIN)),
+            block.get(rows.scalar(PlantRows::LIMIT_MAX)),
+        );
+        let previous = block.get(rows.scalar(PlantRows::PREVIOUS));
+        let last = LastInput {
+            a: block.get(rows.scalar(PlantRows::A)),
+            input: block.get(rows.scalar(PlantRows::INPUT)),
+            memory_sum: block.get(rows.scalar(PlantRows::MEMORY_SUM)),
+            least_inverse_alpha: block.get(rows.scalar(PlantRows::LEAST_INVERSE_ALPHA)),
+            slope_sum: block.get(rows.scalar(PlantRows::SLOPE_SUM)),
+            reach_sum: block.get(rows.scalar(PlantRows::REACH_SUM)),
+        };
+        // w(t) = y_d(t) - h(v(t - Ts)), as the two passes compute it.
+        let w = desired - remainder.value(previous);
+        let direct = operators.test::<T>(|n| n as usize <= crate::DIRECT_OPERATORS);
+        let proven = direct & proven_within(&last, w, min, max);
+        if active.and_not(proven).any() {
+            return None;
+        }
+        let fed = update_memory_with::<_, _, false, true>(
+            block,
+            rows.operators(),
+            operators,
+            w,
+            active,
+            self.uniform,
+        );
+        // Within the limits, so the clamp keeps v and the output guard counts nothing (the
+        // clamp is kept all the same, `GuardLanes::clamp_or`'s comparisons: the limits hold
+        // whatever the proof); a lane without a finite desired position keeps its output and
+        // counts it (`crate::OutputGuard`).
+        let v = last.a * w + fed.sum;
+        let v = L::select(v.lt(min), min, L::select(v.gt(max), max, v));
+        let out = v.or_keep(active, previous);
+        block.set(rows.scalar(PlantRows::INPUT), w.or_keep(active, last.input));
+        block.set(
+            rows.scalar(PlantRows::MEMORY_SUM),
+            fed.sum.or_keep(active, last.memory_sum),
+        );
+        block.set(rows.scalar(PlantRows::PREVIOUS), out);
+        if !active.all() {
+            let skipped = (!active).count();
+            block.set_counter(NON_FINITE, block.counter(NON_FINITE) + skipped);
+        }
+        Some(out)
+    }
+
     /// One sample of every lane with the remainder `h` (`crate::ihc::ihc_step`).
     #[inline(always)]
     fn step_with<T: Real, R: LaneRemainder<T, W>, const W: usize, const MODE: u8>(
@@ -293,6 +360,11 @@ impl PlantKernel<IhcMethod> {
         remainder: R,
     ) -> L<T, W> {
         let rows = &self.rows;
+        if MODE == DELAYED
+            && let Some(out) = self.delayed_in_one_pass(block, desired, remainder)
+        {
+            return out;
+        }
         let mut guard = GuardLanes::load(
             block,
             rows.scalar(PlantRows::LIMIT_MIN),

@@ -19,7 +19,16 @@
 //! integer as wide as the sample type, the form vector compares produce and blends consume,
 //! so that a condition never leaves the vector registers); an exact solve that needs more
 //! segments or root-finder iterations in one lane than in the others runs those lanes alone
-//! while the others wait masked (a block costs as much as its slowest lane).
+//! while the others wait masked (a block costs as much as its slowest lane). A block of a
+//! multiple of 32 rows takes one row more, so that the same row of neighbouring blocks never
+//! lies a multiple of 4 KB apart (4K aliasing of their loads and stores).
+//!
+//! The plain delayed IHC ([`crate::SolveMode::Delayed`]) steps a block in one pass over its
+//! operators, the memory fed while its sum is taken, when a bound proves every lane's drive
+//! within its limits before the pass: the drive moves by at most the inverse's greatest slope
+//! times the move of its target `w = y_d - h(v(t - Ts))`, with a margin for rounding; the
+//! other blocks evaluate first and feed after, as the single [`crate::Ihc`] does. The same
+//! bits either way.
 //!
 //! # The single channel is the oracle
 //! Every lane performs the operations of its single-channel twin ([`crate::Ihc`],
@@ -44,6 +53,7 @@ mod root;
 mod run;
 mod storage;
 mod wihc;
+mod within;
 
 use core::fmt;
 

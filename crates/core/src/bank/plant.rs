@@ -138,6 +138,8 @@ pub(crate) fn write_lane<T: Real, S: BankStorage<T, W>, B: Buffer<T>, const W: u
         (PlantRows::LIMIT_MAX, guard.limits.max()),
         (PlantRows::PREVIOUS, guard.previous),
         (PlantRows::LEAST_INVERSE_ALPHA, bank.least_inverse_alpha()),
+        (PlantRows::SLOPE_SUM, bank.slope_sum()),
+        (PlantRows::REACH_SUM, bank.reach_sum()),
     ];
     for (which, value) in scalars {
         blocks.set_value(lane, rows.scalar(which), value);
