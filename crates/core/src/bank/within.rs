@@ -1,35 +1,38 @@
 //! The plain delayed IHC's proof, before a sample, that its output stays within the limits.
 //!
-//! The delayed loop (eq. (5) with `v(t - Ts)` in the cubic) knows its target
-//! `w = y_d - h(v(t - Ts))` before the sample and evaluates `v = P1^{-1}[w]` directly (section
-//! 3.1). Evaluated in two passes over the operators, the sum at `w` first and the memory fed
-//! after, it feeds the memory only when `v` lies within the limits (beyond them the loop walks
-//! to the limit instead). When the bound below proves `v` within the limits before the
-//! evaluation, one pass does both, as the DIHC's does (`crate::bank::dihc`), with the same
-//! bits: the memory and the sum of that pass are those of the two.
+//! The delayed loop (eq. (5) with `v(t - Ts)` in the cubic) knows its target `w = y_d - h(v(t -
+//! Ts))` before the sample and evaluates `v = P1^{-1}[w]` directly (section 3.1). Evaluated in
+//! two passes over the operators, the sum at `w` first and the memory fed after, it feeds the
+//! memory only when `v` lies within the limits (beyond them the loop walks to the limit
+//! instead). When the bound below proves `v` within the limits before the evaluation, one pass
+//! does both, as the DIHC's does (`crate::bank::dihc`), with the same bits: the memory and the
+//! sum of that pass are those of the two.
 //!
 //! **The bound.** Let `v_prev = a w_prev + sum_i b_i z_i` be the bank's output at its last
 //! input `w_prev` (memory `z_i`). Fed `w`, each one-sided play operator's memory moves towards
 //! `w` by at most `|w - w_prev|`, the operators of smaller thresholds at least as far as those
-//! of larger ones (the memory curve of a play-operator bank fed from rest is 1-Lipschitz in the
-//! threshold), so `P1^{-1}` is monotone and moves by at most `|w - w_prev| / q`, where `q` is
-//! the bank's least reciprocal slope `1 / max(a, a + b_1 + ... + b_k)`
-//! (`crate::walk::PlayBank::least_inverse_alpha`; the inverse is increasing, eq. (7)'s
-//! invertibility). So `v` lies within `[min, max]` when, rising,
-//! `v_prev + (w - w_prev) / q <= max` and `v_prev >= min`, and falling the mirror image, each
-//! with a margin for rounding.
+//! of larger ones (fed from rest, the memory `z(r)` of the one-sided operators `max(x - r,
+//! min(x, z))` stays non-increasing in the threshold `r` with a slope of at least -1: the two
+//! bounds `x - r` and `x` it is clamped between have slopes -1 and 0), so the moves fold into
+//! the segments' slopes `a + b_1 + ... + b_k`, `P1^{-1}` is monotone and moves by at most `|w -
+//! w_prev| / q`, where `q` is the bank's least reciprocal slope `1 / max(a, a + b_1 + ... +
+//! b_k)` (`crate::walk::PlayBank::least_inverse_alpha`; the inverse is increasing, eq. (7)'s
+//! invertibility). So `v` lies within `[min, max]` when, rising, `v_prev + (w - w_prev) / q <=
+//! max` and `v_prev >= min`, and falling the mirror image, each with a margin for rounding.
 //!
 //! **The margin.** The evaluated sums differ from the exact ones by at most `(n + 2) eps/2` of
 //! the size of their terms, `sum |b_i z_i| <= (|a| + sum |b_i|) |x| + sum |b_i r_i|` at input
 //! `x` (`|z_i| <= |x| + r_i`); the play operators' `x - r_i` round by `eps/2` of the same; and
 //! after a walk the memory sum is the walk's segment sum, recomputed from the memory every
-//! `crate::walk::SYNC_INTERVAL` (64) walks, each adding a few roundings of the same size. With
+//! `crate::walk::SYNC_INTERVAL` (64) walks, each adding a few roundings of the size of the
+//! terms at its own input (fed, like this one, where the drive is within the limits: an
+//! argued bound, not a formal one). With
 //! at most `crate::DIRECT_OPERATORS` (16) operators that is below `64 (16 + 4)` half-ulps of
-//! the terms' size; the margin is `4096 eps` of it (about three times more), plus `4096 eps`
-//! of `|min| + |max|` for the rounding of the test itself. A lane it does not prove evaluates
-//! in two passes as before; a proof the rounding could break would leave a lane's memory fed
-//! where its single-channel twin's is not, which the bank's property tests (every channel equal
-//! to its twin, bit for bit) would see.
+//! the terms' size; the margin is `4096 eps` of it (six times more), plus `4096 eps` of
+//! `|min| + |max|` for the rounding of the test itself. A lane it does not prove evaluates in
+//! two passes as before; a proof the rounding could break would leave a lane's memory fed where
+//! its single-channel twin's is not, which the bank's property tests (every channel equal to
+//! its twin, bit for bit) would see.
 
 use super::lanes::{Lanes, Mask};
 use crate::Real;
