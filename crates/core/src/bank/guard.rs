@@ -125,6 +125,18 @@ impl<T: Real, const W: usize> GuardLanes<T, W> {
         self.previous
     }
 
+    /// Records `value`, proven within the limits before it was computed, as the output of the
+    /// lanes of `active`: clamped all the same ([`GuardLanes::clamp_or`]: the limits hold
+    /// whatever the proof), nothing counted as clamped (within the limits, the clamp keeps
+    /// `value`, as [`GuardLanes::clamp`] would). Returns every lane's output.
+    #[inline(always)]
+    pub fn record_within(&mut self, value: L<T, W>, active: Mask<T, W>) -> L<T, W> {
+        self.previous = self
+            .clamp_or(value, self.previous)
+            .or_keep(active, self.previous);
+        self.previous
+    }
+
     /// `OutputGuard::emit` for the lanes of `active`: clamps, counts, records. Returns every
     /// lane's output (the previous one for the lanes not active).
     #[inline(always)]

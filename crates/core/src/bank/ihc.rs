@@ -10,7 +10,7 @@ use super::play::{
 };
 use super::root::{LaneRemainder, increasing_root};
 use super::run::{BankKernel, BlockKernel, run};
-use super::storage::{BankStorage, Block, NON_FINITE, OperatorTables, PlantRows};
+use super::storage::{BankStorage, Block, OperatorTables, PlantRows};
 use super::within::{LastInput, proven_within};
 use super::{BankError, LANES};
 use crate::{Buffer, Ihc, Mpim, OutputLimits, Real, SolveMode};
@@ -298,56 +298,43 @@ impl PlantKernel<IhcMethod> {
         remainder: R,
     ) -> Option<L<T, W>> {
         let rows = &self.rows;
-        let active = desired.is_finite();
+        let mut guard = GuardLanes::load(
+            block,
+            rows.scalar(PlantRows::LIMIT_MIN),
+            rows.scalar(PlantRows::LIMIT_MAX),
+            rows.scalar(PlantRows::PREVIOUS),
+        );
+        let active = guard.accept(desired);
         if !active.any() {
             return None;
         }
-        let operators = block.count(PlantRows::OPERATORS);
-        let (min, max) = (
-            block.get(rows.scalar(PlantRows::LIMIT_MIN)),
-            block.get(rows.scalar(PlantRows::LIMIT_MAX)),
-        );
-        let previous = block.get(rows.scalar(PlantRows::PREVIOUS));
+        let mut state = PlayState::load(block, rows);
         let last = LastInput {
-            a: block.get(rows.scalar(PlantRows::A)),
-            input: block.get(rows.scalar(PlantRows::INPUT)),
-            memory_sum: block.get(rows.scalar(PlantRows::MEMORY_SUM)),
+            output: state.output(),
+            input: state.input,
             least_inverse_alpha: block.get(rows.scalar(PlantRows::LEAST_INVERSE_ALPHA)),
             slope_sum: block.get(rows.scalar(PlantRows::SLOPE_SUM)),
             reach_sum: block.get(rows.scalar(PlantRows::REACH_SUM)),
         };
         // w(t) = y_d(t) - h(v(t - Ts)), as the two passes compute it.
-        let w = desired - remainder.value(previous);
-        let direct = operators.test::<T>(|n| n as usize <= crate::DIRECT_OPERATORS);
-        let proven = direct & proven_within(&last, w, min, max);
+        let w = desired - remainder.value(guard.previous);
+        let proven = evaluate_directly(&state) & proven_within(&last, w, guard.min, guard.max);
         if active.and_not(proven).any() {
             return None;
         }
         let fed = update_memory_with::<_, _, false, true>(
             block,
             rows.operators(),
-            operators,
+            state.operators,
             w,
             active,
             self.uniform,
         );
-        // Within the limits, so the clamp keeps v and the output guard counts nothing (the
-        // clamp is kept all the same, `GuardLanes::clamp_or`'s comparisons: the limits hold
-        // whatever the proof); a lane without a finite desired position keeps its output and
-        // counts it (`crate::OutputGuard`).
-        let v = last.a * w + fed.sum;
-        let v = L::select(v.lt(min), min, L::select(v.gt(max), max, v));
-        let out = v.or_keep(active, previous);
-        block.set(rows.scalar(PlantRows::INPUT), w.or_keep(active, last.input));
-        block.set(
-            rows.scalar(PlantRows::MEMORY_SUM),
-            fed.sum.or_keep(active, last.memory_sum),
-        );
-        block.set(rows.scalar(PlantRows::PREVIOUS), out);
-        if !active.all() {
-            let skipped = (!active).count();
-            block.set_counter(NON_FINITE, block.counter(NON_FINITE) + skipped);
-        }
+        state.input = w.or_keep(active, state.input);
+        state.memory_sum = fed.sum.or_keep(active, state.memory_sum);
+        let out = guard.record_within(state.a * w + fed.sum, active);
+        state.store_evaluated(block, rows);
+        guard.store(block, rows.scalar(PlantRows::PREVIOUS));
         Some(out)
     }
 

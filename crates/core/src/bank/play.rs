@@ -93,6 +93,15 @@ impl<T: Real, const W: usize> PlayState<T, W> {
         block.set_count(PlantRows::SINCE_SYNC, self.since_sync);
     }
 
+    /// Writes back what feeding a directly evaluated input changes (the input and the memory
+    /// sum; the counts are left unused, recounted before a walk): [`PlayState::store`] without
+    /// the count rows, which a one-pass step would otherwise write unchanged.
+    #[inline(always)]
+    pub fn store_evaluated(&self, block: &mut Block<'_, T, W>, rows: &PlantRows) {
+        block.set(rows.scalar(PlantRows::INPUT), self.input);
+        block.set(rows.scalar(PlantRows::MEMORY_SUM), self.memory_sum);
+    }
+
     /// The bank's output at its last input, `a x + sum b_i w_i`.
     #[inline(always)]
     pub fn output(&self) -> L<T, W> {

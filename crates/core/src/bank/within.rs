@@ -42,12 +42,10 @@ type L<T, const W: usize> = Lanes<T, W>;
 /// A lane's play-operator bank at its last input, as the bound reads it.
 #[derive(Debug, Clone, Copy)]
 pub(crate) struct LastInput<T, const W: usize> {
-    /// `a` of `P1^{-1}[x] = a x + sum b_i F_{r_i}[x]`.
-    pub a: L<T, W>,
+    /// The bank's output there, `a w(t - Ts) + sum b_i z_i` (`super::play::PlayState::output`).
+    pub output: L<T, W>,
     /// The last input fed, `w(t - Ts)`.
     pub input: L<T, W>,
-    /// `sum b_i z_i` of the memory after it.
-    pub memory_sum: L<T, W>,
     /// `crate::walk::PlayBank::least_inverse_alpha`.
     pub least_inverse_alpha: L<T, W>,
     /// `crate::walk::PlayBank::slope_sum` and `reach_sum`: the scale of the rounding.
@@ -66,7 +64,7 @@ pub(crate) fn proven_within<T: Real, const W: usize>(
     max: L<T, W>,
 ) -> Mask<T, W> {
     let zero = Lanes::zero();
-    let v_prev = last.a * last.input + last.memory_sum;
+    let v_prev = last.output;
     let tol = Lanes::splat(T::epsilon() * T::from_f64(4096.0));
     let size = last.slope_sum * (w.abs() + last.input.abs()) + last.reach_sum + last.reach_sum;
     let margin = tol * (size + min.abs() + max.abs());
@@ -128,9 +126,8 @@ mod tests {
             let q = bank.least_inverse_alpha();
             for _ in 0..50 {
                 let last = LastInput::<T, 1> {
-                    a: Lanes::splat(bank.a()),
+                    output: Lanes::splat(bank.output()),
                     input: Lanes::splat(bank.input()),
-                    memory_sum: Lanes::splat(bank.memory_sum()),
                     least_inverse_alpha: Lanes::splat(q),
                     slope_sum: Lanes::splat(bank.slope_sum()),
                     reach_sum: Lanes::splat(bank.reach_sum()),
