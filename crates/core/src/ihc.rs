@@ -293,7 +293,7 @@ fn evaluates_directly<T: Real, B: Buffer<T>>(inverse: &PlayBank<T, B>) -> bool {
 /// least_inverse_alpha (v_max - v) + h(v_max) - y_d >= 0`. Falling, the mirror image.
 #[allow(clippy::too_many_arguments)]
 #[inline(always)]
-fn guarded_reach<T: Real, R: Remainder<T>>(
+pub(crate) fn guarded_reach<T: Real, R: Remainder<T>>(
     limits: OutputLimits<T>,
     least_inverse_alpha: T,
     remainder: R,

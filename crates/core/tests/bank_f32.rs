@@ -59,6 +59,13 @@ fn accepted_delayed_loops_equal_their_single_channels() {
     check_accepted_delayed_loops::<f32>();
 }
 
+/// Guarded delayed loops of random banks (any loop gain) on smooth trajectories: the one-pass
+/// step (`crate::bank::within`) beside the reach test and the walks.
+#[test]
+fn guarded_loops_on_smooth_trajectories_equal_their_single_channels() {
+    check_guarded_loops_on_smooth_trajectories::<f32>();
+}
+
 /// Fixed storage (no allocator): a six-axis bank in f32 with two lanes per block equals the
 /// heap bank, and a storage too small is refused.
 #[test]

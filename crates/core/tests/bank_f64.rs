@@ -13,8 +13,8 @@ mod common;
 use bank_twins::*;
 use common::*;
 use hystcomp_core::{
-    BankError, CompensatorBank, CoreError, Heap, Ihc, IhcBank, Mpim, OutputLimits, SolveMode,
-    VectorPath, WihcBank,
+    BankError, CompensatorBank, CoreError, DihcBank, Heap, Ihc, IhcBank, Mpim, OutputLimits,
+    SolveMode, VectorPath, WihcBank,
 };
 use proptest::prelude::*;
 use rand::RngExt;
@@ -70,6 +70,34 @@ proptest! {
 #[test]
 fn accepted_delayed_loops_equal_their_single_channels() {
     check_accepted_delayed_loops::<f64>();
+}
+
+/// Guarded delayed loops of random banks (any loop gain) on smooth trajectories: the one-pass
+/// step (`crate::bank::within`) beside the reach test and the walks.
+#[test]
+fn guarded_loops_on_smooth_trajectories_equal_their_single_channels() {
+    check_guarded_loops_on_smooth_trajectories::<f64>();
+}
+
+/// A bank of zero lanes per block (`W = 0`) is refused, whatever its channels, by every kind
+/// of bank, instead of dividing by its lane count later.
+#[test]
+fn a_bank_of_zero_lanes_is_refused() {
+    let limits = [unit_limits()];
+    for channels in [1, 2, 9] {
+        let plants = vec![table1(); channels];
+        let lanes_refused = |err: BankError| {
+            assert!(err.channel().is_none(), "{err}");
+            assert!(err.to_string().contains("lanes per block"), "{err}");
+        };
+        for mode in MODES {
+            lanes_refused(IhcBank::<f64, Heap, 0>::new(&plants, &limits, mode).unwrap_err());
+            lanes_refused(WihcBank::<f64, Heap, 0>::new(&plants, &limits, mode).unwrap_err());
+        }
+        // Any MPIM serves as a DIHC's inverse model.
+        let ranges = [(0.0, 0.9)];
+        lanes_refused(DihcBank::<f64, Heap, 0>::new(&plants, &ranges, &limits).unwrap_err());
+    }
 }
 
 /// A refused channel is named: the bank's error is the first refused channel's own error.

@@ -40,8 +40,8 @@ impl<T: Real, S: BankStorage<T, W>, const W: usize> DihcBank<T, S, W> {
         limits: &[OutputLimits<T>],
     ) -> Result<Self, BankError> {
         let channels = inverse_models.len();
-        check_bank_size(channels, limits.len())?;
-        check_bank_size(channels, input_ranges.len()).map_err(|_| {
+        check_bank_size(channels, limits.len(), W)?;
+        check_bank_size(channels, input_ranges.len(), W).map_err(|_| {
             BankError::Bank(CoreError::ChannelCount {
                 what: "input ranges (one for every channel, or one for each)",
                 channels,

@@ -11,7 +11,7 @@ use super::play::{
 use super::root::{LaneRemainder, increasing_root};
 use super::run::{BankKernel, BlockKernel, run};
 use super::storage::{BankStorage, Block, OperatorTables, PlantRows};
-use super::within::{LastInput, proven_within};
+use super::within::{LastInput, proven_reachable, proven_within};
 use super::{BankError, LANES};
 use crate::{Buffer, Ihc, Mpim, OutputLimits, Real, SolveMode};
 
@@ -285,13 +285,15 @@ impl PlantKernel<IhcMethod> {
         state.memory_sum = sum.or_keep(lanes, state.memory_sum);
     }
 
-    /// The plain delayed loop's sample in one pass over the operators (as the DIHC's), when
+    /// The delayed loops' sample in one pass over the operators (as the DIHC's), when
     /// [`proven_within`] proves every active lane's `v = P1^{-1}[w]` within its limits before
-    /// the evaluation and every active lane evaluates directly; `None`, the block unchanged,
-    /// otherwise. The same bits as the two passes of [`Self::step_with`]: the pass feeding
-    /// `w` computes the sum the first of those would, and `v` is within the limits.
+    /// the evaluation, every active lane evaluates directly and, in the guarded loop
+    /// (`MODE == GUARDED`), [`proven_reachable`] proves its reach test; `None`, the block
+    /// unchanged, otherwise. The same bits as the two passes of [`Self::step_with`]: the pass
+    /// feeding `w` computes the sum the first of those would, `v` is within the limits, and
+    /// the guarded loop's lanes are those its reach test settles.
     #[inline(always)]
-    fn delayed_in_one_pass<T: Real, R: LaneRemainder<T, W>, const W: usize>(
+    fn delayed_in_one_pass<T: Real, R: LaneRemainder<T, W>, const W: usize, const MODE: u8>(
         &self,
         block: &mut Block<'_, T, W>,
         desired: L<T, W>,
@@ -316,9 +318,23 @@ impl PlantKernel<IhcMethod> {
             slope_sum: block.get(rows.scalar(PlantRows::SLOPE_SUM)),
             reach_sum: block.get(rows.scalar(PlantRows::REACH_SUM)),
         };
-        // w(t) = y_d(t) - h(v(t - Ts)), as the two passes compute it.
-        let w = desired - remainder.value(guard.previous);
-        let proven = evaluate_directly(&state) & proven_within(&last, w, guard.min, guard.max);
+        let h_prev = remainder.value(guard.previous);
+        let mut proven = evaluate_directly(&state);
+        // w(t) = y_d(t) - h(v(t - Ts)) (the guarded loop's under-relaxed target), as the two
+        // passes compute it.
+        let w = if MODE == GUARDED {
+            let f_exact = state.input + h_prev - desired;
+            let w = guarded_target(block, rows, state.input, f_exact, desired, h_prev);
+            let (h_min, h_max) = (remainder.value(guard.min), remainder.value(guard.max));
+            proven = proven
+                & proven_reachable(
+                    &last, w, desired, f_exact, h_min, h_max, guard.min, guard.max,
+                );
+            w
+        } else {
+            desired - h_prev
+        };
+        proven = proven & proven_within(&last, w, guard.min, guard.max);
         if active.and_not(proven).any() {
             return None;
         }
@@ -347,8 +363,8 @@ impl PlantKernel<IhcMethod> {
         remainder: R,
     ) -> L<T, W> {
         let rows = &self.rows;
-        if MODE == DELAYED
-            && let Some(out) = self.delayed_in_one_pass(block, desired, remainder)
+        if MODE != EXACT
+            && let Some(out) = self.delayed_in_one_pass::<_, _, W, MODE>(block, desired, remainder)
         {
             return out;
         }

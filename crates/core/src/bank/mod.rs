@@ -28,7 +28,8 @@
 //! within its limits before the pass: the drive moves by at most the inverse's greatest slope
 //! times the move of its target `w = y_d - h(v(t - Ts))`, with a margin for rounding; the
 //! other blocks evaluate first and feed after, as the single [`crate::Ihc`] does. The same
-//! bits either way.
+//! bits either way. The guarded delayed IHC ([`crate::SolveMode::DelayedGuarded`]) does the
+//! same when its reach test is proven before the pass as well (module `within`).
 //!
 //! # The single channel is the oracle
 //! Every lane performs the operations of its single-channel twin ([`crate::Ihc`],
@@ -178,9 +179,20 @@ impl From<CoreError> for BankError {
     }
 }
 
-/// Checks a bank's size: at least one channel, at most [`MAX_CHANNELS`], and limits for one
-/// channel (shared) or for each.
-pub(crate) fn check_bank_size(channels: usize, limits: usize) -> Result<(), BankError> {
+/// Checks a bank's size: at least one lane per block (`lanes`, the bank's `W`), at least one
+/// channel, at most [`MAX_CHANNELS`], and limits for one channel (shared) or for each.
+pub(crate) fn check_bank_size(
+    channels: usize,
+    limits: usize,
+    lanes: usize,
+) -> Result<(), BankError> {
+    if lanes == 0 {
+        return Err(BankError::Bank(CoreError::NotPositive {
+            what: "lanes per block (the bank's W)",
+            index: None,
+            value: 0.0,
+        }));
+    }
     if channels == 0 {
         return Err(BankError::Bank(CoreError::ChannelCount {
             what: "models",

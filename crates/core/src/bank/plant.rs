@@ -71,7 +71,7 @@ where
     S: BankStorage<T, W>,
     B: Buffer<T>,
 {
-    check_bank_size(plants.len(), limits.len())?;
+    check_bank_size(plants.len(), limits.len(), W)?;
     let n = plants.iter().map(Mpim::len).max().unwrap_or(0);
     let degree = plants
         .iter()

@@ -1,4 +1,5 @@
-//! The plain delayed IHC's proof, before a sample, that its output stays within the limits.
+//! The delayed IHC's proofs, before a sample, that its output stays within the limits and (the
+//! guarded loop's, [`proven_reachable`]) that its reach test passes.
 //!
 //! The delayed loop (eq. (5) with `v(t - Ts)` in the cubic) knows its target `w = y_d - h(v(t -
 //! Ts))` before the sample and evaluates `v = P1^{-1}[w]` directly (section 3.1). Evaluated in
@@ -65,13 +66,75 @@ pub(crate) fn proven_within<T: Real, const W: usize>(
 ) -> Mask<T, W> {
     let zero = Lanes::zero();
     let v_prev = last.output;
-    let tol = Lanes::splat(T::epsilon() * T::from_f64(4096.0));
-    let size = last.slope_sum * (w.abs() + last.input.abs()) + last.reach_sum + last.reach_sum;
-    let margin = tol * (size + min.abs() + max.abs());
+    let margin = margin(last, w, min, max);
     let up = (w - last.input).max(zero);
     let down = (last.input - w).max(zero);
     let q = last.least_inverse_alpha;
     up.le(q * (max - v_prev - margin)) & down.le(q * (v_prev - margin - min))
+}
+
+/// The allowance of [`proven_within`] for rounding: `4096 eps` of the size of the sums' terms
+/// at `w` and at the last input, and of the limits (see the [module documentation](self)).
+#[inline(always)]
+fn margin<T: Real, const W: usize>(
+    last: &LastInput<T, W>,
+    w: L<T, W>,
+    min: L<T, W>,
+    max: L<T, W>,
+) -> L<T, W> {
+    let size = last.slope_sum * (w.abs() + last.input.abs()) + last.reach_sum + last.reach_sum;
+    tolerance::<T, W>() * (size + min.abs() + max.abs())
+}
+
+/// `4096 eps`.
+#[inline(always)]
+fn tolerance<T: Real, const W: usize>() -> L<T, W> {
+    Lanes::splat(T::epsilon() * T::from_f64(4096.0))
+}
+
+/// The lanes whose guarded delayed loop (`crate::SolveMode::DelayedGuarded`) is proven, before
+/// `v = P1^{-1}[w]` is evaluated, to pass its reach test (`crate::ihc::guarded_reach`: `y_d`
+/// reachable within the limits, so `v` is the sample's output without a walk) by the test's
+/// bound at the limit, in lanes [`proven_within`] proves: `h_min` and `h_max` are the
+/// remainder at the limits, `f_exact = w(t - Ts) + h(v(t - Ts)) - y_d` the exact residual at
+/// the last sample.
+///
+/// Rising (`f_exact <= 0`), the reach test passes when `w >= w(t - Ts)` and `w + q (max - v) +
+/// h(max) - y_d >= 0` (`q` the least reciprocal slope). Where [`proven_within`] holds, `v <=
+/// v_prev + (w - w(t - Ts)) / q + margin` (the module documentation's bound, `margin` its
+/// rounding allowance), so the test's left side is at least `w(t - Ts) + q (max - v_prev -
+/// margin) + h(max) - y_d`, which this computes before the evaluation; `w` cancels. Falling,
+/// the mirror image with `min`. The remainder's values at the limits are the same bits in both
+/// (the same function of the same limits), so only the two expressions' additions and
+/// products round: each within a few `eps` of the size of its terms, against an allowance of
+/// `4096 eps` of it. `w` and `w(t - Ts)` are compared as the test compares them.
+#[allow(clippy::too_many_arguments)]
+#[inline(always)]
+pub(crate) fn proven_reachable<T: Real, const W: usize>(
+    last: &LastInput<T, W>,
+    w: L<T, W>,
+    desired: L<T, W>,
+    f_exact: L<T, W>,
+    h_min: L<T, W>,
+    h_max: L<T, W>,
+    min: L<T, W>,
+    max: L<T, W>,
+) -> Mask<T, W> {
+    let zero = Lanes::zero();
+    let (w_prev, v_prev, q) = (last.input, last.output, last.least_inverse_alpha);
+    let margin = margin(last, w, min, max);
+    let up = w_prev + q * (max - v_prev - margin) + h_max - desired;
+    let down = w_prev - q * (v_prev - margin - min) + h_min - desired;
+    let size = w.abs()
+        + w_prev.abs()
+        + q * (max.abs() + min.abs() + v_prev.abs() + margin)
+        + h_max.abs()
+        + h_min.abs()
+        + desired.abs();
+    let slack = tolerance::<T, W>() * size;
+    let rises = w.ge(w_prev) & up.ge(slack);
+    let falls = w.le(w_prev) & down.le(-slack);
+    Mask::choose(f_exact.le(zero), rises, falls)
 }
 
 #[cfg(test)]
@@ -177,6 +240,142 @@ mod tests {
             roomy_proven * 100 >= roomy * 99,
             "roomy {roomy_proven} of {roomy}"
         );
+    }
+
+    /// Random banks after random histories, a random odd cubic as the remainder, random
+    /// under-relaxations (half of them 1), and the desired position placed at the guarded
+    /// loop's reach edge (its bound at the limit within a few per cent of the move, either
+    /// side): wherever [`proven_within`] and [`proven_reachable`] both prove a lane, the
+    /// single-channel loop's own reach test (`crate::ihc::guarded_reach`, with the bits the
+    /// bank evaluates for `v`) passes; and of the lanes [`proven_within`] proves whose reach
+    /// test passes, [`proven_reachable`] proves nearly all.
+    fn reach_holds<T: Real>(seed: u64) {
+        use crate::OutputLimits;
+        use crate::ihc::guarded_reach;
+        use crate::solve::{OddCubic, Remainder};
+        let mut rng = ChaCha8Rng::seed_from_u64(seed);
+        let (mut proven, mut passes, mut tight_proven, mut clear_proven) = (0, 0, 0, 0);
+        for _ in 0..400 {
+            let mut bank = random_bank::<T>(&mut rng);
+            let scale = bank
+                .thresholds()
+                .last()
+                .map_or(1.0, |&r| Real::to_f64(r))
+                .max(1.0);
+            for _ in 0..(rng.random::<u32>() % 40) {
+                bank.feed(T::from_f64(scale * (4.0 * rng.random::<f64>() - 2.0)));
+            }
+            // Half the histories end far out the way the loop goes on: every operator then
+            // moves with the input, and where the bank's steepest slope is its last, the
+            // bound on `v` is met with equality (the allowances are what is left).
+            let rising = rng.random::<bool>();
+            if rng.random::<bool>() {
+                let far = if rising { 3.0 } else { -3.0 };
+                bank.feed(T::from_f64(far * scale));
+            }
+            let q = bank.least_inverse_alpha();
+            let (w_prev, v_prev) = (bank.input(), bank.output());
+            let last = LastInput::<T, 1> {
+                output: Lanes::splat(v_prev),
+                input: Lanes::splat(w_prev),
+                least_inverse_alpha: Lanes::splat(q),
+                slope_sum: Lanes::splat(bank.slope_sum()),
+                reach_sum: Lanes::splat(bank.reach_sum()),
+            };
+            let v_scale = Real::to_f64(v_prev).abs().max(scale);
+            for _ in 0..50 {
+                // h(v) = c v^3, of either sign, up to a tenth of the bank's scale at v_scale.
+                let c = (2.0 * rng.random::<f64>() - 1.0) * 0.1 * v_scale / v_scale.powi(3);
+                let h = OddCubic(T::from_f64(c));
+                let room = |rng: &mut ChaCha8Rng| v_scale * (0.01 + rng.random::<f64>());
+                let max = T::from_f64(Real::to_f64(v_prev) + room(&mut rng));
+                let min = T::from_f64(Real::to_f64(v_prev) - room(&mut rng));
+                let (h_min, h_max) = (h.value(min), h.value(max));
+                // The reach bound at the limit, moved by a few per cent of its own scale
+                // (or of the rounding) either way.
+                let edge = if rising {
+                    Real::to_f64(w_prev)
+                        + Real::to_f64(q) * (Real::to_f64(max) - Real::to_f64(v_prev))
+                        + Real::to_f64(h_max)
+                } else {
+                    Real::to_f64(w_prev)
+                        - Real::to_f64(q) * (Real::to_f64(v_prev) - Real::to_f64(min))
+                        + Real::to_f64(h_min)
+                };
+                let tight = rng.random::<f64>() < 0.5;
+                let shift = if tight {
+                    // From the rounding of f64 to that of f32 and beyond.
+                    let size = 10f64.powf(-17.0 * rng.random::<f64>());
+                    size * v_scale * (rng.random::<f64>() - 0.5)
+                } else {
+                    0.1 * v_scale * (rng.random::<f64>() - 0.5)
+                };
+                let desired = T::from_f64(edge + shift);
+                let h_prev = h.value(v_prev);
+                let f_exact = w_prev + h_prev - desired;
+                let relaxation = if rng.random::<bool>() {
+                    T::one()
+                } else {
+                    T::from_f64(rng.random::<f64>().max(1e-3))
+                };
+                // As `super::plant::guarded_target` computes it.
+                let w = if relaxation < T::one() {
+                    w_prev - relaxation * f_exact
+                } else {
+                    desired - h_prev
+                };
+                let lane = Lanes::splat;
+                let within = proven_within(&last, lane(w), lane(min), lane(max)).all();
+                let is_proven = within
+                    && proven_reachable(
+                        &last,
+                        lane(w),
+                        lane(desired),
+                        lane(f_exact),
+                        lane(h_min),
+                        lane(h_max),
+                        lane(min),
+                        lane(max),
+                    )
+                    .all();
+                let v = bank.output_at(w);
+                let limits = OutputLimits::new(min, max).expect("min < max");
+                let passed = guarded_reach(limits, q, h, desired, f_exact, w_prev, w, v);
+                // Reachable at the limit by more than the rounding's allowance.
+                let clear = if rising { shift } else { -shift } < -1e-2 * v_scale;
+                passes += usize::from(passed && within && clear);
+                clear_proven += usize::from(is_proven && clear);
+                if is_proven {
+                    proven += 1;
+                    tight_proven += usize::from(tight);
+                    assert!(
+                        passed,
+                        "seed {seed}: proven, but the reach test fails at w = {w}, v = {v}, \
+                         y_d = {desired}, limits [{min}, {max}]"
+                    );
+                }
+            }
+        }
+        // Not vacuous: nearly every lane that passes, of those proven within the limits, is
+        // proven to; some of them at the edge.
+        assert!(
+            clear_proven * 100 >= passes * 95 && tight_proven > 20,
+            "proven {proven} ({tight_proven} at the edge), {clear_proven} of {passes} clear ones"
+        );
+    }
+
+    #[test]
+    fn a_proven_reach_passes_the_guarded_loops_test_f64() {
+        for seed in 0..4 {
+            reach_holds::<f64>(0x5EED_2000 + seed);
+        }
+    }
+
+    #[test]
+    fn a_proven_reach_passes_the_guarded_loops_test_f32() {
+        for seed in 0..4 {
+            reach_holds::<f32>(0x5EED_3000 + seed);
+        }
     }
 
     #[test]

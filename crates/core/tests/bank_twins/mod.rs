@@ -380,26 +380,48 @@ pub fn check_every_vector_path<T: Real>(
     Ok(())
 }
 
-/// The plain delayed loops of [`accepted_delayed_banks`] in `T`, eight lanes, equal their
-/// single twins: on the random trajectories, and on smooth ones without a NaN (each channel's
-/// plant driven by two tones over 0.47 +- 0.55 of its limits, so that most blocks step in one
-/// pass and some reach a limit and walk, the path `crate::bank::within` chooses between).
+/// The plain and guarded delayed loops of [`accepted_delayed_banks`] in `T`, eight lanes,
+/// equal their single twins: on the random trajectories, and on [`smooth_desired`] ones.
 pub fn check_accepted_delayed_loops<T: Real>() {
     for (models, limits, desired) in accepted_delayed_banks() {
         check_plant_banks::<T, 8>(&models, &limits, &desired, SolveMode::Delayed).unwrap();
-        let smooth: Vec<Vec<f64>> = models
-            .iter()
-            .enumerate()
-            .map(|(c, model)| {
-                let mut plant = model.clone();
-                (0..desired[c].len())
-                    .map(|k| {
-                        let t = k as f64 * 0.01 + c as f64 * 0.37;
-                        plant.step(0.47 + 0.4 * (3.0 * t).sin() + 0.15 * (7.3 * t).sin())
-                    })
-                    .collect()
-            })
-            .collect();
-        check_plant_banks::<T, 8>(&models, &limits, &smooth, SolveMode::Delayed).unwrap();
+        let smooth = smooth_desired(&models, desired[0].len());
+        for mode in [SolveMode::Delayed, SolveMode::DelayedGuarded] {
+            check_plant_banks::<T, 8>(&models, &limits, &smooth, mode).unwrap();
+        }
     }
+}
+
+/// The guarded delayed loops of random banks (any loop gain: under-relaxed where it is above
+/// 1; up to 24 operators, both sides of the direct evaluation's 16) in `T`, eight lanes, on
+/// [`smooth_desired`] trajectories, equal their single twins: the one-pass step, the reach
+/// test and the walks side by side.
+pub fn check_guarded_loops_on_smooth_trajectories<T: Real>() {
+    let mut rng = rng(1603);
+    for case in 0..16 {
+        let channels = 1 + case * 2;
+        let models = random_models(&mut rng, channels);
+        let limits: Vec<(f64, f64)> = (0..channels).map(|_| random_limits(&mut rng)).collect();
+        let smooth = smooth_desired(&models, 300);
+        check_plant_banks::<T, 8>(&models, &limits, &smooth, SolveMode::DelayedGuarded).unwrap();
+    }
+}
+
+/// Trajectories without a NaN: each channel's plant driven by two tones over 0.47 +- 0.55 of
+/// [0, 1], its own phase, so that most blocks of the delayed loops step in one pass and some
+/// reach a limit and walk (the paths `crate::bank::within` chooses between).
+pub fn smooth_desired(models: &[VecMpim], len: usize) -> Vec<Vec<f64>> {
+    models
+        .iter()
+        .enumerate()
+        .map(|(c, model)| {
+            let mut plant = model.clone();
+            (0..len)
+                .map(|k| {
+                    let t = k as f64 * 0.01 + c as f64 * 0.37;
+                    plant.step(0.47 + 0.4 * (3.0 * t).sin() + 0.15 * (7.3 * t).sin())
+                })
+                .collect()
+        })
+        .collect()
 }
