@@ -103,9 +103,10 @@ typedef enum HystcompStatus {
      */
     HYSTCOMP_STATUS_WRONG_DIRECTION = 6,
     /**
-     * An input sample was NaN or infinite. The call still completed: a compensator held its
-     * previous output (always within its limits) for that sample, a forward model output NaN
-     * for it, and the state was not changed by it.
+     * An input sample was NaN or infinite (or, for a compensator, too large to normalise by
+     * the model's scale or for its creep or vibration links to follow). The call still
+     * completed: a compensator held its previous output (always within its limits) for that
+     * sample, a forward model output NaN for it, and the state was not changed by it.
      */
     HYSTCOMP_STATUS_NON_FINITE_INPUT = 7,
     /**
@@ -281,7 +282,8 @@ typedef struct HystcompDiagnostics {
      */
     uint64_t loop_saturated;
     /**
-     * NaN or infinite desired positions (the previous output was held).
+     * NaN or infinite desired positions, or too large to normalise or for the model's creep
+     * or vibration links to follow (the previous output was held).
      */
     uint64_t non_finite;
     /**

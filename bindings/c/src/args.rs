@@ -200,8 +200,8 @@ pub(crate) fn non_finite_failure(count: usize, first: usize, what: &'static str)
     Failure::new(
         HystcompStatus::NonFiniteInput,
         format!(
-            "{count} {what} sample(s) were NaN or infinite (the first at index {first}); \
-             their outputs are held or NaN, see the status documentation"
+            "{count} {what} sample(s) were NaN or infinite, or too large to use (the first at \
+             index {first}); their outputs are held or NaN, see the status documentation"
         ),
     )
 }

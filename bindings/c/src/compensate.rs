@@ -21,7 +21,8 @@ pub struct HystcompDiagnostics {
     /// desired position was reachable: the loop lagged or rang after a jump (0 for the exact
     /// methods and DIHC).
     pub loop_saturated: u64,
-    /// NaN or infinite desired positions (the previous output was held).
+    /// NaN or infinite desired positions, or too large to normalise or for the model's creep
+    /// or vibration links to follow (the previous output was held).
     pub non_finite: u64,
     /// The lower drive limit used, in the model's voltage unit.
     pub v_min: f64,
@@ -172,10 +173,10 @@ pub unsafe extern "C" fn hystcomp_compensate(
         // SAFETY: `y_d_len` readable doubles (the caller's contract), non-NULL and aligned
         // (checked); copied before `v` is written, so the two may be the same array.
         let desired = unsafe { std::slice::from_raw_parts(y_d, y_d_len) }.to_vec();
-        let count = desired.iter().filter(|x| !x.is_finite()).count();
-        let first = desired.iter().position(|x| !x.is_finite()).unwrap_or(0);
         let mut drive = vec![0.0; y_d_len];
-        compensator.process(&desired, &mut drive)?;
+        // The samples held: not finite, or too large for the model's scale or its links.
+        let (count, first) = compensator.process_held(&desired, &mut drive)?;
+        let first = first.unwrap_or(0);
         // SAFETY: `v` is valid for `v_len == drive.len()` writes (the caller's contract),
         // non-NULL and aligned (checked); `desired` is a copy.
         unsafe { std::ptr::copy_nonoverlapping(drive.as_ptr(), v, drive.len()) };

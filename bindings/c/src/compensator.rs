@@ -226,7 +226,8 @@ pub unsafe extern "C" fn hystcomp_compensator_step(
             Err(Failure::new(
                 HystcompStatus::NonFiniteInput,
                 "the desired position is NaN or infinite (or too large to normalise by the \
-                 model's scale); the previous output was held",
+                 model's scale, or for its creep or vibration links to follow); the previous \
+                 output was held",
             ))
         } else {
             Ok(())

@@ -112,9 +112,10 @@ pub enum HystcompStatus {
     /// The model file maps the other direction from the one the method needs (IHC and WIHC
     /// need a plant model, DIHC an inverse model).
     WrongDirection = 6,
-    /// An input sample was NaN or infinite. The call still completed: a compensator held its
-    /// previous output (always within its limits) for that sample, a forward model output NaN
-    /// for it, and the state was not changed by it.
+    /// An input sample was NaN or infinite (or, for a compensator, too large to normalise by
+    /// the model's scale or for its creep or vibration links to follow). The call still
+    /// completed: a compensator held its previous output (always within its limits) for that
+    /// sample, a forward model output NaN for it, and the state was not changed by it.
     NonFiniteInput = 7,
     /// A Rust panic was caught at the boundary: a bug in hystcomp, please report it with the
     /// message. The handle involved should be freed.

@@ -644,7 +644,7 @@ fn non_finite_samples_hold_the_output_and_are_reported() {
     assert_eq!(status, NON_FINITE_INPUT);
     assert_eq!(
         last_error().split(" (").next(),
-        Some("2 desired position sample(s) were NaN or infinite")
+        Some("2 desired position sample(s) were NaN or infinite, or too large to use")
     );
     assert!(last_error().contains("the first at index 1"));
     assert_eq!(control[1], control[0]);

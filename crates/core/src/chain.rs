@@ -11,6 +11,7 @@
 //! Everything runs in the normalised units of the hysteresis link's output (the creep link's
 //! `origin` is given in them); the model file (`hystcomp-io`) carries the physical scales.
 
+use crate::real::followable;
 use crate::{
     Buffer, Compensator, CoreError, Creep, CreepInverse, Diagnostics, Mpim, OutputLimits, Real,
     Vibration, VibrationInverse,
@@ -176,17 +177,28 @@ impl<T: Real, C: Buffer<T>, H: Compensator<T>> Compensator<T> for ChainCompensat
         self.last = None;
     }
 
+    /// A desired sample not finite, or (with a creep or vibration link) beyond the square
+    /// root of the largest value, which those links' states could not follow, is counted as
+    /// not finite and the last one is held (before any, the hysteresis compensator holds its
+    /// initial output).
     #[inline]
     fn step(&mut self, desired: T) -> T {
-        let desired = if desired.is_finite() {
+        let dynamic = self.vibration.is_some() || self.creep.is_some();
+        let usable = if dynamic {
+            followable(desired)
+        } else {
+            desired.is_finite()
+        };
+        let desired = if usable {
             self.last = Some(desired);
             desired
         } else {
             self.non_finite += 1;
             match self.last {
                 Some(last) => last,
-                // Nothing to hold yet: the hysteresis compensator holds its initial output.
-                None => return self.hysteresis.step(desired),
+                // Nothing to hold yet: the hysteresis compensator holds its initial output
+                // (and counts the sample, as this does).
+                None => return self.hysteresis.step(T::nan()),
             }
         };
         let mut y = desired;

@@ -44,6 +44,7 @@
 //! sample by sample from the same state they undo each other to rounding.
 
 use crate::buffer::{copied, filled};
+use crate::real::followable;
 use crate::{Buffer, CoreError, Real};
 
 /// The most creep elements a link may have.
@@ -154,17 +155,28 @@ impl<T: Real, B: Buffer<T>> Elements<T, B> {
         (direct, memory)
     }
 
-    /// Feeds `x(k)` to every element; returns `sum_i c_i (z_i(k) - origin)`.
+    /// Feeds `x(k)` to every element; returns `sum_i c_i (z_i(k) - origin)`. A sample that
+    /// would leave a state or the sum not finite (an `x` too large for the arithmetic: `x -
+    /// z_i` overflows) leaves every state as it was and returns NaN, so that one absurd sample
+    /// cannot leave the link's states infinite or NaN for good.
     #[inline]
     fn feed(&mut self, x: T) -> T {
         let origin = self.origin;
         let (c, g) = (self.weights.as_ref(), self.gains.as_ref());
-        let z = self.states.as_mut();
-        let n = c.len().min(g.len()).min(z.len());
+        let n = c.len().min(g.len()).min(self.states.as_ref().len());
+        let next = |z: T, g: T| z + g * (x - z);
         let mut sum = T::zero();
-        for i in 0..n {
-            z[i] = z[i] + g[i] * (x - z[i]);
-            sum = sum + c[i] * (z[i] - origin);
+        let mut finite = true;
+        for ((z, g), c) in self.states.as_ref().iter().zip(g).zip(c) {
+            let z = next(*z, *g);
+            finite = finite && z.is_finite();
+            sum = sum + *c * (z - origin);
+        }
+        if !(finite && sum.is_finite()) {
+            return T::nan();
+        }
+        for (z, g) in self.states.as_mut().iter_mut().zip(g).take(n) {
+            *z = next(*z, *g);
         }
         sum
     }
@@ -207,9 +219,10 @@ macro_rules! accessors {
         }
 
         /// Every element at `output`: the state of a link that has rested long at the output
-        /// `output` (its input then was `origin + (1 - sum c_i) (output - origin)`).
+        /// `output` (its input then was `origin + (1 - sum c_i) (output - origin)`). An
+        /// `output` not finite or beyond the square root of the largest value changes nothing.
         pub fn settle(&mut self, output: T) {
-            if output.is_finite() {
+            if followable(output) {
                 self.elements.states.as_mut().fill(output);
             }
         }
@@ -254,7 +267,7 @@ impl<T: Real, B: Buffer<T>> Creep<T, B> {
     }
 
     /// One sample: `x(k)` for the hysteresis output `h(k)`. NaN in gives NaN out and leaves the
-    /// state as it was.
+    /// state as it was; so does an `h` whose arithmetic overflows (an infinite one too).
     #[inline]
     pub fn step(&mut self, h: T) -> T {
         if h.is_nan() {
@@ -263,7 +276,9 @@ impl<T: Real, B: Buffer<T>> Creep<T, B> {
         let origin = self.elements.origin;
         let (direct, memory) = self.elements.feedthrough_and_memory();
         let x = origin + ((h - origin) + memory) / (T::one() - direct);
-        self.elements.feed(x);
+        if self.elements.feed(x).is_nan() {
+            return T::nan();
+        }
         x
     }
 }
@@ -292,11 +307,13 @@ impl<T: Real, B: Buffer<T>> CreepInverse<T, B> {
     accessors!();
 
     /// One sample: the hysteresis output `h(k)` for the displacement `x(k)`. NaN in gives NaN
-    /// out and leaves the state as it was.
+    /// out and leaves the state as it was; so does an `x` not finite or beyond the square root
+    /// of the largest value (a state charged that far would take the link's slowest time
+    /// constant many times over to recover), and an `x` whose arithmetic overflows.
     #[inline]
     pub fn step(&mut self, x: T) -> T {
-        if x.is_nan() {
-            return x;
+        if !followable(x) {
+            return T::nan();
         }
         x - self.elements.feed(x)
     }

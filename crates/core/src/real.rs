@@ -89,3 +89,11 @@ impl Real for f32 {
         self as f64
     }
 }
+
+/// Whether `x` is within the square root of the largest finite value (about `1.8e19` in
+/// `f32`, `1.3e154` in f64): a position the dynamic links (creep, vibration) can follow
+/// without their states overflowing, whose gains are far below that root. NaN: no.
+#[inline]
+pub(crate) fn followable<T: Real>(x: T) -> bool {
+    x.abs() <= T::max_value().sqrt()
+}

@@ -30,6 +30,7 @@
 use core::marker::PhantomData;
 
 use crate::buffer::{copied, filled};
+use crate::real::followable;
 use crate::roots::{Complex, MAX_DEGREE, roots};
 use crate::{Buffer, CoreError, Real};
 
@@ -355,12 +356,15 @@ impl<T: Real, B: Buffer<T>> VibrationInverse<T, B> {
         self.started = true;
     }
 
-    /// One sample: takes `y_d(k + p)` and returns `x(k)`. A non-finite desired sample is
-    /// replaced by the previous one (callers count it).
+    /// One sample: takes `y_d(k + p)` and returns `x(k)`. A desired sample not finite, or
+    /// beyond the square root of the largest value (which the filter's states could not
+    /// follow without overflowing), is replaced by the previous one (callers count it). A
+    /// sample whose arithmetic overflows all the same gives NaN and leaves the state as it
+    /// was, so that the filter's memory of its past outputs never holds an infinity or NaN.
     #[inline]
     pub fn step(&mut self, desired: T) -> T {
         if !self.started {
-            self.settle(if desired.is_finite() {
+            self.settle(if followable(desired) {
                 desired
             } else {
                 T::zero()
@@ -376,12 +380,14 @@ impl<T: Real, B: Buffer<T>> VibrationInverse<T, B> {
         } else {
             self.head - 1
         };
-        let desired = if desired.is_finite() {
+        let desired = if followable(desired) {
             desired
         } else {
-            self.ring.as_ref().get(newest).copied().unwrap_or(desired)
+            self.ring.as_ref().get(newest).copied().unwrap_or(T::zero())
         };
-        // The oldest slot becomes the newest sample.
+        // The oldest slot becomes the newest sample (restored below if the sample overflows).
+        let head = self.head;
+        let oldest = self.ring.as_ref().get(head).copied();
         if let Some(slot) = self.ring.as_mut().get_mut(self.head) {
             *slot = desired;
         }
@@ -404,10 +410,14 @@ impl<T: Real, B: Buffer<T>> VibrationInverse<T, B> {
                 index = 0;
             }
         }
-        // b0 B_s x = A u.
-        push_front(self.u.as_mut(), u);
+        // b0 B_s x = A u, with u(k) in front of the past ones (pushed only once x is known
+        // to be finite).
         let mut acc = T::zero();
-        for (a, u) in self.a.as_ref().iter().zip(self.u.as_ref()) {
+        let mut a = self.a.as_ref().iter();
+        if let Some(a0) = a.next() {
+            acc = acc + *a0 * u;
+        }
+        for (a, u) in a.zip(self.u.as_ref()) {
             acc = acc + *a * *u;
         }
         let mut feedback = T::zero();
@@ -415,6 +425,14 @@ impl<T: Real, B: Buffer<T>> VibrationInverse<T, B> {
             feedback = feedback + *s * *x;
         }
         let x = acc / self.b0 - feedback;
+        if !x.is_finite() {
+            if let (Some(slot), Some(oldest)) = (self.ring.as_mut().get_mut(head), oldest) {
+                *slot = oldest;
+            }
+            self.head = head;
+            return T::nan();
+        }
+        push_front(self.u.as_mut(), u);
         push_front(self.x.as_mut(), x);
         x
     }

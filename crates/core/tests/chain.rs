@@ -268,6 +268,88 @@ proptest! {
         }
         prop_assert_eq!(chain.diagnostics().non_finite, non_finite);
     }
+
+    /// Samples the creep and vibration links cannot follow (finite but beyond the square
+    /// root of the largest value, e.g. `f64::MAX` then `-f64::MAX`, whose difference
+    /// overflows) are taken as not finite: the chain gives the same bits and diagnostics as on
+    /// the trajectory with NaN in their place, never leaves its limits, and keeps following
+    /// the samples after them (before, `f64::MAX` then `-f64::MAX` left the creep link's
+    /// states NaN and the drive held at a limit for good).
+    #[test]
+    fn samples_too_large_to_follow_count_as_not_finite(
+        seed in any::<u64>(),
+        wild in proptest::collection::vec(
+            prop_oneof![
+                4 => -2.0f64..3.0,
+                1 => prop_oneof![Just(f64::MAX), Just(-f64::MAX), Just(1e308), Just(-1e300), Just(2e154)],
+                1 => Just(f64::NAN),
+            ],
+            1..300,
+        ),
+    ) {
+        let mut r = rng(seed);
+        let plant = random_invertible_model(&mut r, 6);
+        let (taus, weights) = random_creep(&mut r);
+        let (b, a, delay) = random_vibration(&mut r);
+        let preview = VibrationInverse::<f64, Vec<f64>>::minimum_preview(&b, delay).unwrap() + 3;
+        let with_links = r.random::<u32>() % 3;
+        let chain = || {
+            let ihc: Ihc<f64, Vec<f64>> = Ihc::new(&plant, unit_limits(), SolveMode::Exact).unwrap();
+            let vibration = (with_links != 1).then(|| VibrationInverse::new(&b, &a, delay, preview).unwrap());
+            let creep = (with_links != 2).then(|| CreepInverse::new(&taus, &weights, 0.0, 1e-3).unwrap());
+            ChainCompensator::<f64, Vec<f64>, _>::new(vibration, creep, ihc)
+        };
+        let (mut wild_chain, mut nan_chain) = (chain(), chain());
+        for y in &wild {
+            let replaced = if y.abs() > 1.3e154 { f64::NAN } else { *y };
+            let v = wild_chain.step(*y);
+            prop_assert!(v.is_finite() && (0.0..=1.0).contains(&v), "{v}");
+            prop_assert_eq!(v.to_bits(), nan_chain.step(replaced).to_bits());
+        }
+        prop_assert_eq!(wild_chain.diagnostics(), nan_chain.diagnostics());
+        prop_assert_eq!(
+            wild_chain.diagnostics().non_finite,
+            wild.iter().filter(|y| y.is_nan() || y.abs() > 1.3e154).count() as u64
+        );
+    }
+}
+
+/// Each link alone: a sample it cannot follow (beyond the square root of the largest value,
+/// or not finite) gives NaN (creep) or the previous sample (vibration) and leaves the state
+/// as it was, so that what follows is what follows without it, bit for bit.
+#[test]
+fn each_link_passes_over_a_sample_it_cannot_follow() {
+    let mut r = rng(17);
+    for _ in 0..50 {
+        let (taus, weights) = random_creep(&mut r);
+        let (b, a, delay) = random_vibration(&mut r);
+        let preview = VibrationInverse::<f64, Vec<f64>>::minimum_preview(&b, delay).unwrap() + 2;
+        let desired = random_input(&mut r, 200, -2.0, 3.0);
+        let at = 1 + r.random::<u32>() as usize % 150;
+        let huge = [f64::MAX, -f64::MAX, 1e200, f64::INFINITY][r.random::<u32>() as usize % 4];
+        let mut creep: CreepInverse<f64, Vec<f64>> =
+            CreepInverse::new(&taus, &weights, 0.0, 1e-3).unwrap();
+        let mut creep_twin = creep.clone();
+        let mut vibration: VibrationInverse<f64, Vec<f64>> =
+            VibrationInverse::new(&b, &a, delay, preview).unwrap();
+        let mut vibration_twin = vibration.clone();
+        for (k, y) in desired.iter().enumerate() {
+            if k == at {
+                assert!(creep.step(huge).is_nan());
+                // The previous desired sample in its place.
+                assert_eq!(
+                    vibration.step(huge).to_bits(),
+                    vibration_twin.step(desired[k - 1]).to_bits()
+                );
+                continue;
+            }
+            assert_eq!(creep.step(*y).to_bits(), creep_twin.step(*y).to_bits());
+            assert_eq!(
+                vibration.step(*y).to_bits(),
+                vibration_twin.step(*y).to_bits()
+            );
+        }
+    }
 }
 
 #[test]

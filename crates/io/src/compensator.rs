@@ -586,19 +586,19 @@ impl ScaledCompensator {
 
     /// [`ScaledCompensator::step`], and whether it held its previous drive for `desired`:
     /// when its normalised value is not finite (NaN or infinite, or finite but too large for
-    /// the model's scale, which overflows to infinity when normalised).
+    /// the model's scale, which overflows to infinity when normalised), or, with creep or
+    /// vibration links, too large for them to follow (`hystcomp_core::ChainCompensator`):
+    /// whenever the compensator counts the sample as not finite.
     #[inline]
     pub fn step_held(&mut self, desired: f64) -> (f64, bool) {
         let normalised = self.desired.normalise(desired);
-        let v = self
-            .control
-            .to_physical(self.inner.get_mut().step(normalised));
+        let inner = self.inner.get_mut();
+        let before = inner.diagnostics().non_finite;
+        let v = self.control.to_physical(inner.step(normalised));
+        let held = inner.diagnostics().non_finite != before;
         // The normalised limits map onto the physical ones up to rounding; clamp once more so
         // that the physical output never leaves them, not even by an ulp.
-        (
-            v.clamp(self.limits.0, self.limits.1),
-            !normalised.is_finite(),
-        )
+        (v.clamp(self.limits.0, self.limits.1), held)
     }
 
     /// A whole signal; refuses slices of different lengths. With a vibration link the signal
@@ -611,6 +611,16 @@ impl ScaledCompensator {
         desired: &[f64],
         control: &mut [f64],
     ) -> Result<(), CompensatorError> {
+        self.process_held(desired, control).map(|_| ())
+    }
+
+    /// [`ScaledCompensator::process`], and how many of the trajectory's samples it held its
+    /// previous drive for (see [`ScaledCompensator::step_held`]), with the index of the first.
+    pub fn process_held(
+        &mut self,
+        desired: &[f64],
+        control: &mut [f64],
+    ) -> Result<(usize, Option<usize>), CompensatorError> {
         if desired.len() != control.len() {
             return Err(CompensatorError::Core(CoreError::LengthMismatch {
                 what: "control",
@@ -626,20 +636,25 @@ impl ScaledCompensator {
             desired
         };
         let Some(&last) = desired.last() else {
-            return Ok(());
+            return Ok((0, None));
         };
         let p = self.preview;
+        let (mut count, mut first) = (0, None);
         for (k, d) in desired
             .iter()
             .chain(std::iter::repeat_n(&last, p))
             .enumerate()
         {
-            let v = self.step(*d);
+            let (v, held) = self.step_held(*d);
+            if held && k < desired.len() {
+                count += 1;
+                first = first.or(Some(k));
+            }
             if k >= p {
                 control[k - p] = v;
             }
         }
-        Ok(())
+        Ok((count, first))
     }
 
     /// Saturated (desired position out of reach), loop-saturated (drive clamped by a delayed
