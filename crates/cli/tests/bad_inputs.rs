@@ -943,6 +943,123 @@ fn matrix() -> Vec<(Fixture, Case)> {
         )
         .output(f.path("out.csv"))
     });
+    add(&|f| {
+        f.write(
+            "big-weight.json",
+            &edited_model("\"weights\": [", "\"weights\": [1e300, "),
+        );
+        // One weight too many now: drop the last threshold's partner by adding a threshold.
+        let text = std::fs::read_to_string(f.path("big-weight.json"))
+            .unwrap()
+            .replacen("\"thresholds\": [", "\"thresholds\": [0.0, ", 1);
+        f.write("big-weight.json", &text);
+        Case::refused(
+            "a model weight of 1e300 (compensate once drove a flat 0 V)",
+            compensate(f, &f.arg("big-weight.json"), &f.arg("trajectory.csv"), &[]),
+            1,
+            &["big-weight.json", "1e15"],
+        )
+        .output(f.path("drive.csv"))
+    });
+    add(&|f| {
+        let stage = std::fs::read_to_string(f.path("stage.toml"))
+            .unwrap()
+            .replacen("stroke_um = 72.27", "stroke_um = 1e300", 1);
+        f.write("far.toml", &stage);
+        Case::refused(
+            "a stage stroke of 1e300 um (simulate once wrote positions no reader takes)",
+            [
+                "simulate",
+                "--stage",
+                &f.arg("far.toml"),
+                "--input",
+                &f.arg("volts.csv"),
+                "-o",
+                &f.arg("out.csv"),
+            ],
+            1,
+            &["far.toml", "stroke_um"],
+        )
+        .output(f.path("out.csv"))
+    });
+    add(&|f| {
+        // The record's displacements scaled into the subnormal range: the errors in % of
+        // their range overflow.
+        let mut text = String::new();
+        for (k, line) in record_csv().lines().enumerate() {
+            let mut cells: Vec<String> = line.split(',').map(str::to_owned).collect();
+            if k > 0 {
+                cells[2] = format!("{:e}", cells[2].parse::<f64>().unwrap() * 1e-310);
+            }
+            text += &(cells.join(",") + "\n");
+        }
+        f.write("subnormal.csv", &text);
+        Case::refused(
+            "predict on a record of subnormal values (once reported an error of inf %)",
+            [
+                "predict",
+                "--model",
+                &f.arg("table1-plant.json"),
+                "--data",
+                &f.arg("subnormal.csv"),
+                "--voltage-column",
+                "2",
+                "--displacement-column",
+                "3",
+                "-o",
+                &f.arg("p.csv"),
+            ],
+            1,
+            &["subnormal.csv", "too small a range"],
+        )
+        .output(f.path("p.csv"))
+    });
+    for decimation in ["0", "5"] {
+        add(&move |f| {
+            Case::refused(
+                "identify --decimation without a chain (once accepted and ignored)",
+                identify(f, &f.arg("record.csv"), &["--decimation", decimation]),
+                1,
+                &["--decimation"],
+            )
+            .output(f.path("model.json"))
+        });
+    }
+    add(&|f| {
+        // Said before the study's seconds of work (it once failed only when writing).
+        f.write("not-a-folder", "a file\n");
+        Case::refused(
+            "reproduce --output onto a file",
+            ["reproduce", "-o", &f.arg("not-a-folder")],
+            3,
+            &["not-a-folder", "cannot make the output folder"],
+        )
+    });
+    add(&|_| {
+        let counts = vec!["1"; 33].join(",");
+        Case::refused(
+            "bench --channels with 33 counts",
+            ["bench", "--channels", counts.as_str()],
+            1,
+            &["--channels", "1 to 32"],
+        )
+    });
+    add(&|_| {
+        Case::refused(
+            "bench --channels 65536 --repeats 1000 (hours of timing)",
+            ["bench", "--channels", "65536", "--repeats", "1000"],
+            1,
+            &["channel-steps", "--repeats 1000"],
+        )
+    });
+    add(&|_| {
+        Case::refused(
+            "bench --samples 1000000 --repeats 1000 (hours of timing)",
+            ["bench", "--samples", "1000000", "--repeats", "1000"],
+            1,
+            &["--samples 1000000 x --repeats 1000"],
+        )
+    });
     for (name, args, fragment) in [
         (
             "bench --samples 1e12",

@@ -459,3 +459,52 @@ fn bench_times_each_vector_path_on_the_thread_cpu_clock() {
         assert!(ns.is_finite() && ns > 0.0, "{f}");
     }
 }
+
+/// A channel named after the time column is not driven by the clock: found by name, its
+/// column is the time column, refused as an explicit `--desired-columns` naming it is (it
+/// once read the time values silently and ignored the channel's own column).
+#[test]
+fn a_channel_named_after_the_time_column_is_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let desired = trajectory(dir.path(), ["x", "y", "z"]);
+    let text = std::fs::read_to_string(models().join("table1-xyz-set.json")).unwrap();
+    let renamed = text.replacen("\"name\": \"y\"", "\"name\": \"time_s\"", 1);
+    assert_ne!(renamed, text, "channel y is in the set");
+    let set_file = dir.path().join("clock-set.json");
+    std::fs::write(&set_file, renamed).unwrap();
+    let out = dir.path().join("drive.csv");
+    assert_fails(
+        &ihc_args(&set_file, &desired, &out, &["--allow-saturation"]),
+        &["channel 1 (time_s)", "time column"],
+    );
+    assert!(!out.exists(), "nothing written");
+}
+
+/// A channel name with a line break (a column header cannot hold one) is refused when the
+/// set is read, exit status 1, not when the drives are written (it once failed there, exit
+/// status 3, after the whole run).
+#[test]
+fn a_channel_name_with_a_line_break_is_refused_when_read() {
+    let dir = tempfile::tempdir().unwrap();
+    let desired = trajectory(dir.path(), ["x", "y", "z"]);
+    let text = std::fs::read_to_string(models().join("table1-xyz-set.json")).unwrap();
+    let renamed = text.replacen("\"name\": \"y\"", "\"name\": \"y\\nz\"", 1);
+    assert_ne!(renamed, text, "channel y is in the set");
+    let set_file = dir.path().join("broken-name-set.json");
+    std::fs::write(&set_file, renamed).unwrap();
+    let out = dir.path().join("drive.csv");
+    let output = hystcomp(&ihc_args(
+        &set_file,
+        &desired,
+        &out,
+        &["--allow-saturation"],
+    ));
+    assert_eq!(output.status.code(), Some(1), "{}", stderr(&output));
+    assert!(stderr(&output).contains("channel 1"), "{}", stderr(&output));
+    assert!(
+        stderr(&output).contains("line break"),
+        "{}",
+        stderr(&output)
+    );
+    assert!(!out.exists(), "nothing written");
+}

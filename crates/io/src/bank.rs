@@ -55,6 +55,8 @@ type RawFields = std::collections::BTreeMap<String, Box<RawValue>>;
 
 /// `text`'s top-level object, its fields as text; the message says what is wrong.
 fn raw_fields(text: &str) -> Result<RawFields, String> {
+    // A UTF-8 byte-order mark (some Windows editors write one) is no part of the JSON.
+    let text = text.strip_prefix('\u{feff}').unwrap_or(text);
     serde_json::from_str::<RawFields>(text).map_err(|e| {
         match serde_json::from_str::<serde::de::IgnoredAny>(text) {
             Ok(_) => format!(
@@ -380,6 +382,14 @@ impl ModelSet {
                     )));
                 }
             };
+            // A name becomes a column header of the drive file: no line break or other control
+            // character (refused here, not when the drives are written).
+            if name.chars().any(char::is_control) {
+                return Err(set_error(format!(
+                    "channel {k}: \"name\" {name:?} holds a line break or another control \
+                     character, which a column header cannot"
+                )));
+            }
             if let Some(unknown) = entry.keys().find(|k| *k != "name" && *k != "model") {
                 return Err(set_error(format!(
                     "channel {k} ({name}): unknown field {unknown:?} (a channel is {{\"name\": \

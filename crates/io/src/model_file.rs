@@ -66,7 +66,8 @@ use std::fmt;
 use std::path::Path;
 
 use hystcomp_core::{
-    CoreError, Creep, CreepInverse, InputPolynomial, Mpim, OutputMap, Vibration, VibrationInverse,
+    CoreError, Creep, CreepInverse, InputPolynomial, Mpim, OutputMap, Shown, Vibration,
+    VibrationInverse,
 };
 use serde::{Deserialize, Serialize};
 
@@ -281,6 +282,10 @@ pub const SCALE_RANGE: [f64; 2] = [1e-12, 1e12];
 
 /// The largest magnitude of an `offset` (`1e15`, as for the values of a record).
 pub const MAX_OFFSET: f64 = 1e15;
+
+/// The largest magnitude of a model's normalised parameter (thresholds, weights, `a1`, `a2`,
+/// the input polynomial, the input range): `1e15`, as for an offset.
+pub const MAX_PARAMETER: f64 = 1e15;
 
 /// What a model maps.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
@@ -626,6 +631,35 @@ impl ModelFile {
                 ),
             });
         }
+        // Normalised parameters are of order 1; a finite one beyond MAX_PARAMETER overflows
+        // the compensators' arithmetic (a drive stuck at a limit) before any check sees it
+        // (the model's own checks below refuse the non-finite ones, each with its reason).
+        let parameters = [
+            ("input_range", &self.input_range[..]),
+            ("thresholds", &self.thresholds[..]),
+            ("weights", &self.weights[..]),
+            ("a1", std::slice::from_ref(&self.a1)),
+            ("a2", std::slice::from_ref(&self.a2)),
+            (
+                "input_polynomial",
+                self.input_polynomial.as_deref().unwrap_or(&[]),
+            ),
+        ];
+        for (what, values) in parameters {
+            if let Some((i, v)) = values
+                .iter()
+                .enumerate()
+                .find(|(_, v)| v.is_finite() && v.abs() > MAX_PARAMETER)
+            {
+                return Err(ModelFileError::Invalid {
+                    message: format!(
+                        "{what}[{i}] = {} is beyond {MAX_PARAMETER:e} in magnitude (normalised \
+                         units, of order 1 in an identified model)",
+                        Shown(*v)
+                    ),
+                });
+            }
+        }
         if self.thresholds.len() > MAX_OPERATORS {
             return Err(ModelFileError::Invalid {
                 message: format!(
@@ -794,6 +828,8 @@ impl ModelFile {
 
     /// Parses and validates a model file's text.
     pub fn from_json(text: &str) -> Result<Self, ModelFileError> {
+        // A UTF-8 byte-order mark (some Windows editors write one) is no part of the JSON.
+        let text = text.strip_prefix('\u{feff}').unwrap_or(text);
         // Look at the version first, so that a future format gets the right message rather than
         // a complaint about fields this build does not know.
         let value: serde_json::Value =

@@ -456,3 +456,32 @@ fn file_with_version(file: ModelFile) -> ModelFile {
         ..file
     }
 }
+
+/// A normalised parameter beyond 1e15 in magnitude is refused, named by field and index (a
+/// weight of 1e300 made the compensators drive a flat 0 V); 1e15 itself loads.
+#[test]
+fn parameters_beyond_1e15_are_refused() {
+    for (field, index) in [("weights", 3), ("thresholds", 9), ("input_range", 1)] {
+        let message = refusal(|v| v[field][index] = 1e300.into());
+        assert!(message.contains(&format!("{field}[{index}]")), "{message}");
+        assert!(message.contains("1e15"), "{message}");
+    }
+    assert!(refusal(|v| v["a1"] = (-2e15).into()).contains("a1[0]"));
+    let text = std::fs::read_to_string(example("table1-plant.json")).unwrap();
+    let mut value: serde_json::Value = serde_json::from_str(&text).unwrap();
+    value["a2"] = 1e15.into();
+    // Loads as far as the bound goes (the model may be refused for other reasons, not this).
+    if let Err(e) = ModelFile::from_json(&value.to_string()) {
+        assert!(!e.to_string().contains("beyond 1e15"), "{e}");
+    }
+}
+
+/// A file beginning with a UTF-8 byte-order mark (as some Windows editors save) loads as the
+/// same model.
+#[test]
+fn a_byte_order_mark_is_not_part_of_the_json() {
+    let text = std::fs::read_to_string(example("table1-plant.json")).unwrap();
+    let plain = ModelFile::from_json(&text).unwrap();
+    let marked = ModelFile::from_json(&format!("\u{feff}{text}")).unwrap();
+    assert_eq!(plain, marked);
+}

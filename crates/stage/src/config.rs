@@ -359,6 +359,9 @@ fn finite(field: &'static str, x: f64) -> Result<f64, StageError> {
     }
 }
 
+/// The longest stroke a stage file may give, um (a metre).
+pub const MAX_STROKE_UM: f64 = 1e6;
+
 fn positive(field: &'static str, x: f64) -> Result<(), StageError> {
     // A subnormal value is no physical quantity, and dividing by it overflows.
     if finite(field, x)? > 0.0 && x.is_normal() {
@@ -575,6 +578,15 @@ impl PreisachConfig {
     pub fn validate(&self) -> Result<(), StageError> {
         let p = self;
         positive("hysteresis.preisach.stroke_um", p.stroke_um)?;
+        // A metre: beyond, the simulated positions leave what every reader of a record takes
+        // (1e15) once multiplied out, and no piezo stage strokes that far.
+        within(
+            "hysteresis.preisach.stroke_um",
+            p.stroke_um,
+            0.0,
+            MAX_STROKE_UM,
+            &format!("at most {MAX_STROKE_UM} um"),
+        )?;
         ordered(
             "hysteresis.preisach.voltage_range_v",
             p.voltage_range_v[0],

@@ -61,6 +61,38 @@ const MAX_SAMPLES: usize = 1_000_000;
 /// Most timed runs per figure (`--repeats`).
 const MAX_REPEATS: usize = 1_000;
 
+/// Most work of one bench: samples (channel-steps for the banks) times repeats, summed over
+/// the channel counts, per figure: about a minute or two of timing on a desktop processor.
+const MAX_WORK: usize = 100_000_000;
+
+/// Most channel counts in one `--channels` list.
+const MAX_CHANNEL_COUNTS: usize = 32;
+
+/// Refuses a `--channels` list longer than [`MAX_CHANNEL_COUNTS`], or whose channel-steps
+/// (at least 50 ticks of each count, as `bench_bank` runs them) times `repeats` exceed
+/// [`MAX_WORK`]. Each count's own range is `bench_bank`'s to check.
+fn bounds_work(channels: &[usize], samples: usize, repeats: usize) -> Result<(), CliError> {
+    crate::bounds::count(
+        "--channels (the number of channel counts)",
+        channels.len(),
+        1..=MAX_CHANNEL_COUNTS,
+        "",
+    )?;
+    let steps = channels
+        .iter()
+        .map(|&c| samples.max(c.saturating_mul(50)))
+        .fold(0usize, usize::saturating_add)
+        .saturating_mul(repeats);
+    if steps > MAX_WORK {
+        return Err(CliError::input(format!(
+            "--channels with --samples {samples} and --repeats {repeats} is {steps} channel-steps \
+             per figure (at least 50 ticks of each count), more than the {MAX_WORK} one bench \
+             takes; give fewer channel counts, samples or repeats"
+        )));
+    }
+    Ok(())
+}
+
 /// The preview of the reference chain's vibration inverse, samples (as a streaming user would
 /// choose: a few samples of latency; see `hystcomp_core::reference`).
 const CHAIN_PREVIEW: usize = 8;
@@ -366,6 +398,7 @@ pub fn run(args: &Args, ctx: Context) -> Result<(), CliError> {
                 model.display()
             )));
         }
+        bounds_work(channels, args.samples, args.repeats)?;
         let options = super::bench_bank::Options {
             samples: args.samples,
             repeats: args.repeats,
@@ -380,6 +413,26 @@ pub fn run(args: &Args, ctx: Context) -> Result<(), CliError> {
         ));
     }
     let user_model = args.model.as_deref().map(ModelFile::load).transpose()?;
+    // Each figure's work grows with the operators beyond the built-in 100.
+    let operators = user_model.as_ref().map_or(0, |m| m.thresholds.len());
+    let per_sample = operators.div_ceil(100).max(1);
+    let work = args
+        .samples
+        .saturating_mul(args.repeats)
+        .saturating_mul(per_sample);
+    if work > MAX_WORK {
+        return Err(CliError::input(format!(
+            "--samples {} x --repeats {}{} is {work} sample-runs per figure, more than the \
+             {MAX_WORK} one bench takes (hours of timing); give fewer samples or repeats",
+            args.samples,
+            args.repeats,
+            if per_sample > 1 {
+                format!(" x {per_sample} (the model's {operators} operators, per 100)")
+            } else {
+                String::new()
+            },
+        )));
+    }
     let mut bench = Bench {
         samples: args.samples,
         repeats: args.repeats,

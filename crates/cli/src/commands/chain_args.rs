@@ -93,15 +93,21 @@ impl ChainArgs {
         columns: &ColumnArgs,
         loaded: &Loaded,
     ) -> Result<Option<ChainOptions>, CliError> {
-        if !self.has_creep() && !self.has_dynamics() {
-            return Ok(None);
-        }
         bounds::count(
             "--decimation",
             self.decimation,
             1..=hystcomp_identify::chain::MAX_DECIMATION,
             "",
         )?;
+        if !self.has_creep() && !self.has_dynamics() {
+            if self.decimation != 1 {
+                return Err(CliError::input(
+                    "--decimation thins the samples the creep and hysteresis links are fitted \
+                     on: it needs a chain (--creep, --dynamics or --model-structure)",
+                ));
+            }
+            return Ok(None);
+        }
         let rate = sample_rate(columns, loaded)?;
         let creep = match (self.has_creep(), &self.creep_time_constants) {
             (false, _) => None,

@@ -110,6 +110,20 @@ pub fn run(args: &Args, ctx: Context) -> Result<(), CliError> {
         ))
     })?;
     let stats = prediction.stats;
+    // In % of a range so small that the percentages overflow (subnormal values): refused, not
+    // reported as an infinite error.
+    if ![stats.rms_percent, stats.max_percent, stats.std_percent]
+        .iter()
+        .all(|p| p.is_finite())
+    {
+        return Err(CliError::input(format!(
+            "the measured output spans {} {}: too small a range to give the prediction's errors \
+             in % of it (are the values in the unit the record's options say?)",
+            crate::number(stats.range),
+            output_unit
+        ))
+        .context(args.data.display()));
+    }
     let outside = prediction.outside_input_range;
     let (in_lo, in_hi) = (
         model.input.to_physical(model.input_range[0]),

@@ -118,8 +118,9 @@ fn check_args(args: &Args) -> Result<(), CliError> {
     if !(2..=MAX_PSO_PARTICLES).contains(&args.pso_particles) {
         return Err(CliError::input(format!(
             "--pso-particles {}: give 2 to {MAX_PSO_PARTICLES} particles (the study's default \
-             is 40)",
-            args.pso_particles
+             is {})",
+            args.pso_particles,
+            hystcomp_identify::DEFAULT_PARTICLES
         )));
     }
     Ok(())
@@ -154,6 +155,14 @@ pub fn run(args: &Args, ctx: Context) -> Result<(), CliError> {
             Some(path) => error.context(path.display()),
             None => error,
         }
+    })?;
+    // The output folder before the study's seconds of work: a path that names a file, or a
+    // folder that cannot be made, is said at once.
+    std::fs::create_dir_all(&args.out).map_err(|e| {
+        CliError::output(format!(
+            "cannot make the output folder {}: {e}",
+            args.out.display()
+        ))
     })?;
     let mut bars = Bars { bar: None };
     let study = run_study(&options, &mut bars)?;

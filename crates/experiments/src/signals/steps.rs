@@ -78,7 +78,9 @@ impl Steps {
         }
         let index = index as usize;
         let (from, to) = (self.levels[index], self.levels[index + 1]);
-        let into = since - index as f64 * segment;
+        // Not below 0: at a move's start the rounding of `since / segment` can leave `into`
+        // an ulp negative, which an ideal jump (transition 0) would divide as 0 / 0.
+        let into = (since - index as f64 * segment).max(0.0);
         if into >= self.transition_s {
             to
         } else {
@@ -128,6 +130,33 @@ mod tests {
                 let got = s.unit_value(tau);
                 let want = reference(&s, tau);
                 prop_assert!((got - want).abs() < 1e-9, "{tau}: {got} vs {want}");
+            }
+        }
+    }
+
+    /// Sampled on a grid as the signal command samples it (1 kHz, holds of whole tenths,
+    /// ideal jumps or short moves), every value is finite and between the levels: at a move's
+    /// start the rounding once left an ulp before it, and an ideal jump gave NaN (`signal steps
+    /// --levels 1,-1,1,... --hold 0.1` was refused at t = 1.8 s).
+    #[test]
+    fn sampled_sequences_are_finite_at_every_move() {
+        for transition in [0.0, 1e-4, 0.003] {
+            for hold in [0.1, 0.0001, 0.3] {
+                let levels: Vec<f64> = (0..19)
+                    .map(|k| if k % 2 == 0 { 1.0 } else { -1.0 })
+                    .collect();
+                let s = Steps {
+                    levels,
+                    hold_s: hold,
+                    transition_s: transition,
+                };
+                for k in 0..5000 {
+                    let value = s.unit_value(k as f64 / 1000.0);
+                    assert!(
+                        (-1.0..=1.0).contains(&value),
+                        "hold {hold}, transition {transition}: {value} at sample {k}"
+                    );
+                }
             }
         }
     }

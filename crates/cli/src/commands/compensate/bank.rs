@@ -84,7 +84,7 @@ fn read_trajectory(
         // bad value, a name matching two columns) is this read's error, not a reason to drive
         // the channels from other columns.
         match read(named) {
-            Ok(record) => return Ok(record),
+            Ok(record) => return distinct_columns(record, set),
             Err(DataError::NoSuchColumn { .. } | DataError::NoSuchVariable { .. }) => {}
             Err(error) => {
                 return Err(CliError::from(error).context(format!(
@@ -117,9 +117,13 @@ fn read_trajectory(
             }
         }
     };
-    let record = read(desired)?;
-    // One column per channel, none of them the time column (a channel driven by the clock,
-    // or two channels sharing a trajectory, is almost certainly a wrong index).
+    distinct_columns(read(desired)?, set)
+}
+
+/// `record` (the time column, then one per channel) when no channel reads the time column
+/// or another channel's: a channel driven by the clock, or two channels sharing a
+/// trajectory, is almost certainly a wrong index or name.
+fn distinct_columns(record: Columns, set: &ModelSet) -> Result<Columns, CliError> {
     let Some((time, channels)) = record.names.split_first() else {
         return Ok(record);
     };
@@ -143,6 +147,24 @@ fn read_trajectory(
         }
     }
     Ok(record)
+}
+
+/// The most drive values (samples times channels) one `compensate` run with a model set
+/// writes: 50 million, about 1 GB of CSV text and 400 MB of drives held for it.
+const MAX_BANK_VALUES: usize = 50_000_000;
+
+/// Refuses `samples` of `channels` channels beyond [`MAX_BANK_VALUES`] drive values: every
+/// channel's drives are kept for the output file, which is written whole, so they are bounded
+/// before they are allocated.
+fn check_drive_values(samples: usize, channels: usize) -> Result<(), CliError> {
+    let values = samples.saturating_mul(channels);
+    if values > MAX_BANK_VALUES {
+        return Err(CliError::input(format!(
+            "{samples} samples of {channels} channels are {values} drive values, more than the \
+             {MAX_BANK_VALUES} one run writes; split the trajectory into shorter files"
+        )));
+    }
+    Ok(())
 }
 
 /// Runs `hystcomp compensate` with a model set.
@@ -185,6 +207,7 @@ pub(super) fn run(args: &Args, ctx: Context) -> Result<(), CliError> {
             CliError::input("the trajectory has no samples").context(args.trajectory.display())
         );
     }
+    check_drive_values(n, channels).map_err(|e| e.context(args.trajectory.display()))?;
     let mut tick = vec![0.0; channels];
     let mut drive = vec![0.0; channels];
     let mut control: Vec<Vec<f64>> = vec![vec![0.0; n]; channels];
@@ -347,4 +370,21 @@ pub(super) fn run(args: &Args, ctx: Context) -> Result<(), CliError> {
         "scale the trajectory into the stages' range or widen --limits; ",
         args.allow_saturation,
     )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The bound on drive values: up to it accepted, one more (or an overflowing product)
+    /// refused with the counts named. (A file that large is too slow to write in a test.)
+    #[test]
+    fn drive_values_are_bounded_before_they_are_allocated() {
+        check_drive_values(MAX_BANK_VALUES / 4096, 4096).unwrap();
+        check_drive_values(1, MAX_BANK_VALUES).unwrap();
+        let refused = check_drive_values(MAX_BANK_VALUES / 4096 + 1, 4096).unwrap_err();
+        assert!(refused.to_string().contains("4096 channels"), "{refused}");
+        assert!(check_drive_values(usize::MAX, 2).is_err());
+        assert!(check_drive_values(2000, 65536).is_err());
+    }
 }
