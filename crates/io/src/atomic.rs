@@ -64,61 +64,112 @@ fn resolve_link(path: &Path) -> io::Result<PathBuf> {
     Err(io::Error::other("too many levels of symbolic links"))
 }
 
+/// Writes `first` and then `second` (each a path and its contents) as [`write_atomic`] does,
+/// both temporary files written and flushed before either is renamed: an error while writing
+/// them (a full disk, a folder that does not exist, a directory at a path) leaves both files
+/// as they were. Only a crash between the two renames can leave the first replaced and the
+/// second not (callers that pair files check them against each other, as `learn` does).
+pub fn write_atomic_pair(first: (&Path, &[u8]), second: (&Path, &[u8])) -> io::Result<()> {
+    fn context(path: &Path, error: io::Error) -> io::Error {
+        io::Error::new(
+            error.kind(),
+            format!("could not write {}: {error}", path.display()),
+        )
+    }
+    let prepare = |(path, contents): (&Path, &[u8])| {
+        resolve_link(path)
+            .and_then(|target| Prepared::new(target, |out| out.write_all(contents)))
+            .map_err(|e| context(path, e))
+    };
+    let (a, b) = (prepare(first)?, prepare(second)?);
+    a.commit().map_err(|e| context(first.0, e))?;
+    b.commit().map_err(|e| context(second.0, e))
+}
+
 fn write_replacing<F>(target: &Path, write: F) -> io::Result<()>
 where
     F: FnOnce(&mut dyn Write) -> io::Result<()>,
 {
-    let file_name = target.file_name().ok_or_else(|| {
-        io::Error::new(
-            io::ErrorKind::InvalidInput,
-            "the path does not end in a file name",
-        )
-    })?;
-    let dir = match target.parent() {
-        Some(dir) if !dir.as_os_str().is_empty() => dir,
-        _ => Path::new("."),
-    };
-    let existing = match fs::metadata(target) {
-        Ok(meta) if meta.is_dir() => {
-            return Err(io::Error::new(
-                io::ErrorKind::IsADirectory,
-                "it is a directory; give a file name",
-            ));
-        }
-        Ok(meta) => Some(meta.permissions()),
-        Err(error) if error.kind() == io::ErrorKind::NotFound => None,
-        Err(error) => return Err(error),
-    };
+    Prepared::new(target.to_owned(), write)?.commit()
+}
 
-    let name = file_name.to_string_lossy();
-    let mut cut = name.len().min(NAME_PREFIX_LIMIT);
-    while !name.is_char_boundary(cut) {
-        cut -= 1;
+/// A temporary file written and flushed beside its target, not yet renamed over it (dropped,
+/// it is removed).
+struct Prepared {
+    temporary: tempfile::NamedTempFile,
+    target: PathBuf,
+    dir: PathBuf,
+}
+
+impl Prepared {
+    /// Renames the temporary file over the target and flushes the directory.
+    fn commit(self) -> io::Result<()> {
+        self.temporary
+            .persist(&self.target)
+            .map_err(|error| error.error)?;
+        sync_directory(&self.dir)
     }
-    let prefix = format!(".{}.", &name[..cut]);
-    let mut builder = tempfile::Builder::new();
-    builder.prefix(&prefix).suffix(".tmp");
-    #[cfg(unix)]
-    if existing.is_none() {
-        use std::os::unix::fs::PermissionsExt;
-        // Applied at creation, so the umask narrows it as for any new file.
-        builder.permissions(fs::Permissions::from_mode(0o666));
-    }
-    // Dropping `temporary` on any early return removes the temporary file.
-    let mut temporary = builder
-        .tempfile_in(dir)
-        .map_err(|error| temporary_file_error(dir, error))?;
-    if let Some(permissions) = existing {
-        temporary.as_file().set_permissions(permissions)?;
-    }
+
+    fn new<F>(target: PathBuf, write: F) -> io::Result<Prepared>
+    where
+        F: FnOnce(&mut dyn Write) -> io::Result<()>,
     {
-        let mut buffered = io::BufWriter::new(temporary.as_file_mut());
-        write(&mut buffered)?;
-        buffered.flush()?;
+        let target = target.as_path();
+        let file_name = target.file_name().ok_or_else(|| {
+            io::Error::new(
+                io::ErrorKind::InvalidInput,
+                "the path does not end in a file name",
+            )
+        })?;
+        let dir = match target.parent() {
+            Some(dir) if !dir.as_os_str().is_empty() => dir,
+            _ => Path::new("."),
+        };
+        let existing = match fs::metadata(target) {
+            Ok(meta) if meta.is_dir() => {
+                return Err(io::Error::new(
+                    io::ErrorKind::IsADirectory,
+                    "it is a directory; give a file name",
+                ));
+            }
+            Ok(meta) => Some(meta.permissions()),
+            Err(error) if error.kind() == io::ErrorKind::NotFound => None,
+            Err(error) => return Err(error),
+        };
+
+        let name = file_name.to_string_lossy();
+        let mut cut = name.len().min(NAME_PREFIX_LIMIT);
+        while !name.is_char_boundary(cut) {
+            cut -= 1;
+        }
+        let prefix = format!(".{}.", &name[..cut]);
+        let mut builder = tempfile::Builder::new();
+        builder.prefix(&prefix).suffix(".tmp");
+        #[cfg(unix)]
+        if existing.is_none() {
+            use std::os::unix::fs::PermissionsExt;
+            // Applied at creation, so the umask narrows it as for any new file.
+            builder.permissions(fs::Permissions::from_mode(0o666));
+        }
+        // Dropping `temporary` on any early return removes the temporary file.
+        let mut temporary = builder
+            .tempfile_in(dir)
+            .map_err(|error| temporary_file_error(dir, error))?;
+        if let Some(permissions) = existing {
+            temporary.as_file().set_permissions(permissions)?;
+        }
+        {
+            let mut buffered = io::BufWriter::new(temporary.as_file_mut());
+            write(&mut buffered)?;
+            buffered.flush()?;
+        }
+        temporary.as_file().sync_all()?;
+        Ok(Prepared {
+            temporary,
+            target: target.to_owned(),
+            dir: dir.to_owned(),
+        })
     }
-    temporary.as_file().sync_all()?;
-    temporary.persist(target).map_err(|error| error.error)?;
-    sync_directory(dir)
 }
 
 /// Why the temporary file could not be created, said in terms of the target's folder (the

@@ -7,7 +7,7 @@ use common::*;
 
 use std::fs;
 
-use hystcomp_io::atomic::{write_atomic, write_atomic_with};
+use hystcomp_io::atomic::{write_atomic, write_atomic_pair, write_atomic_with};
 use hystcomp_io::data::{DataError, write_csv};
 
 #[test]
@@ -199,4 +199,48 @@ fn a_failed_write_names_the_path_once_and_leaves_nothing() {
     assert_eq!(message.matches(&shown).count(), 1, "{message}");
     assert!(matches!(error, DataError::Write { .. }), "{error:?}");
     assert!(entries(d.path()).is_empty(), "{:?}", entries(d.path()));
+}
+
+/// A pair of files: both replaced when both can be written; when the second cannot (a
+/// directory at its path, a missing folder), neither is, whichever existed before, and no
+/// temporary file is left (`learn`'s state and drive files once parted on a full disk).
+#[test]
+fn a_pair_is_written_whole_or_not_at_all() {
+    let dir = dir();
+    let (state, drive) = (
+        dir.path().join("out.learn.json"),
+        dir.path().join("out.csv"),
+    );
+    fs::write(&state, "old state").expect("the old state");
+    fs::write(&drive, "old drive").expect("the old drive");
+    write_atomic_pair((&state, b"new state"), (&drive, b"new drive")).expect("both written");
+    assert_eq!(fs::read_to_string(&state).unwrap(), "new state");
+    assert_eq!(fs::read_to_string(&drive).unwrap(), "new drive");
+    assert_eq!(entries(dir.path()), ["out.csv", "out.learn.json"]);
+
+    fs::create_dir(dir.path().join("folder")).unwrap();
+    let refused = [
+        dir.path().join("folder"),
+        dir.path().join("missing/out.csv"),
+    ];
+    for second in &refused {
+        let error = write_atomic_pair((&state, b"third state"), (second, b"third drive"))
+            .expect_err("the second cannot be written");
+        assert_contains(&error.to_string(), &[&second.display().to_string()]);
+        assert_eq!(
+            fs::read_to_string(&state).unwrap(),
+            "new state",
+            "first kept"
+        );
+        // The first refused in turn: the second (an existing file) kept too.
+        let error = write_atomic_pair((second, b"third drive"), (&drive, b"third state"))
+            .expect_err("the first cannot be written");
+        assert_contains(&error.to_string(), &[&second.display().to_string()]);
+        assert_eq!(
+            fs::read_to_string(&drive).unwrap(),
+            "new drive",
+            "second kept"
+        );
+    }
+    assert_eq!(entries(dir.path()), ["folder", "out.csv", "out.learn.json"]);
 }

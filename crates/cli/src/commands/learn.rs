@@ -177,12 +177,12 @@ fn drive_checksum(drive: &[f64]) -> u32 {
     hasher.finalize()
 }
 
-/// Writes a trial's state file, then its drive file: each atomically, the state first, so that
-/// an interruption between the two never leaves a new drive beside a missing or stale state
-/// (the next trial would take it for a first drive, or for another trial); a new state beside
-/// an old drive is refused when read, by the drive's checksum. The drive file's text is made
-/// (and checked: its column names, its values) before the state is written, so that only a
-/// failing disk, not a refused drive, can stop the second write. The state is the learner's
+/// Writes a trial's state file, then its drive file: both written to temporary files first
+/// (`hystcomp_io::atomic::write_atomic_pair`), so that a refused drive or a full disk leaves
+/// the old pair as it was, then renamed, the state first, so that an interruption between the
+/// two renames never leaves a new drive beside a missing or stale state (the next trial would
+/// take it for a first drive, or for another trial); a new state beside an old drive is
+/// refused when read, by the drive's checksum. The state is the learner's
 /// (history, best trial, law, the checksum of its drive) with the trial that comes next and
 /// the divergence guard's stop, if it stopped; the drive file's best drive is the best
 /// trial's, or the drive itself before there is one.
@@ -213,8 +213,15 @@ fn write_trial(
         best,
         model,
     )?;
-    write_state(&state_path(output), &state)?;
-    hystcomp_io::atomic::write_atomic(output, &drive).map_err(|e| CliError::output(e.to_string()))
+    // Both files written before either replaces its old one: a full disk leaves the pair as
+    // it was (only a crash between the two renames can part them, which the checksum sees).
+    let state_text =
+        serde_json::to_string_pretty(&state).map_err(|e| CliError::output(e.to_string()))?;
+    hystcomp_io::atomic::write_atomic_pair(
+        (&state_path(output), state_text.as_bytes()),
+        (output, &drive),
+    )
+    .map_err(|e| CliError::output(e.to_string()))
 }
 
 const STATE_FORMAT: &str = "hystcomp-learn-state";
@@ -416,12 +423,6 @@ fn encode_drive(
         &[time, drive, reference, best],
     )
     .map_err(|e| CliError::output(e.to_string()))
-}
-
-fn write_state(path: &Path, state: &State) -> Result<(), CliError> {
-    let text = serde_json::to_string_pretty(state).map_err(|e| CliError::output(e.to_string()))?;
-    hystcomp_io::atomic::write_atomic(path, text.as_bytes())
-        .map_err(|e| CliError::output(e.to_string()))
 }
 
 /// Runs `hystcomp learn`.
