@@ -460,6 +460,17 @@ fn bench_times_each_vector_path_on_the_thread_cpu_clock() {
     }
 }
 
+/// The xyz set with channel `y` named `name` instead (JSON string text: escapes as written),
+/// written to `file` in `dir`.
+fn set_renaming_y(dir: &Path, name: &str, file: &str) -> PathBuf {
+    let text = std::fs::read_to_string(models().join("table1-xyz-set.json")).unwrap();
+    let renamed = text.replacen("\"name\": \"y\"", &format!("\"name\": \"{name}\""), 1);
+    assert_ne!(renamed, text, "channel y is in the set");
+    let set_file = dir.join(file);
+    std::fs::write(&set_file, renamed).unwrap();
+    set_file
+}
+
 /// A channel named after the time column is not driven by the clock: found by name, its
 /// column is the time column, refused as an explicit `--desired-columns` naming it is (it
 /// once read the time values silently and ignored the channel's own column).
@@ -467,11 +478,7 @@ fn bench_times_each_vector_path_on_the_thread_cpu_clock() {
 fn a_channel_named_after_the_time_column_is_refused() {
     let dir = tempfile::tempdir().unwrap();
     let desired = trajectory(dir.path(), ["x", "y", "z"]);
-    let text = std::fs::read_to_string(models().join("table1-xyz-set.json")).unwrap();
-    let renamed = text.replacen("\"name\": \"y\"", "\"name\": \"time_s\"", 1);
-    assert_ne!(renamed, text, "channel y is in the set");
-    let set_file = dir.path().join("clock-set.json");
-    std::fs::write(&set_file, renamed).unwrap();
+    let set_file = set_renaming_y(dir.path(), "time_s", "clock-set.json");
     let out = dir.path().join("drive.csv");
     assert_fails(
         &ihc_args(&set_file, &desired, &out, &["--allow-saturation"]),
@@ -487,11 +494,7 @@ fn a_channel_named_after_the_time_column_is_refused() {
 fn a_channel_name_with_a_line_break_is_refused_when_read() {
     let dir = tempfile::tempdir().unwrap();
     let desired = trajectory(dir.path(), ["x", "y", "z"]);
-    let text = std::fs::read_to_string(models().join("table1-xyz-set.json")).unwrap();
-    let renamed = text.replacen("\"name\": \"y\"", "\"name\": \"y\\nz\"", 1);
-    assert_ne!(renamed, text, "channel y is in the set");
-    let set_file = dir.path().join("broken-name-set.json");
-    std::fs::write(&set_file, renamed).unwrap();
+    let set_file = set_renaming_y(dir.path(), "y\\nz", "broken-name-set.json");
     let out = dir.path().join("drive.csv");
     let output = hystcomp(&ihc_args(
         &set_file,

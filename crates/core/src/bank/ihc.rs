@@ -1,12 +1,11 @@
 //! A bank of IHC channels (section 3.1, eqs. (5)-(8)): [`crate::Ihc`] lane by lane.
 
 use super::channels::{Channels, compensator_bank};
-use super::guard::GuardLanes;
 use super::lanes::{Lanes, Mask};
 use super::plant::{PlantKernel, guarded_target, plant_bank, with_remainder, write_lane};
 use super::play::{
-    LaneEquation, PlayState, ReachOnly, feed, feed_solved, memory_sum_at, recount, solve,
-    update_memory_with,
+    LaneEquation, PlayState, ReachOnly, feed, feed_solved, feed_uncounted, memory_sum_at, recount,
+    solve, update_memory_with,
 };
 use super::root::{LaneRemainder, increasing_root};
 use super::run::{BankKernel, BlockKernel, run};
@@ -281,8 +280,7 @@ impl PlantKernel<IhcMethod> {
             lanes,
             self.uniform,
         );
-        state.input = w.or_keep(lanes, state.input);
-        state.memory_sum = sum.or_keep(lanes, state.memory_sum);
+        state.record_input(w, sum, lanes);
     }
 
     /// The delayed loops' sample in one pass over the operators (as the DIHC's), when
@@ -300,12 +298,7 @@ impl PlantKernel<IhcMethod> {
         remainder: R,
     ) -> Option<L<T, W>> {
         let rows = &self.rows;
-        let mut guard = GuardLanes::load(
-            block,
-            rows.scalar(PlantRows::LIMIT_MIN),
-            rows.scalar(PlantRows::LIMIT_MAX),
-            rows.scalar(PlantRows::PREVIOUS),
-        );
+        let mut guard = self.guard(block);
         let active = guard.accept(desired);
         if !active.any() {
             return None;
@@ -332,23 +325,15 @@ impl PlantKernel<IhcMethod> {
                 );
             w
         } else {
-            desired - h_prev
+            let w = desired - h_prev;
+            proven = proven & proven_within(&last, w, guard.min, guard.max);
+            w
         };
-        proven = proven & proven_within(&last, w, guard.min, guard.max);
         if active.and_not(proven).any() {
             return None;
         }
-        let fed = update_memory_with::<_, _, false, true>(
-            block,
-            rows.operators(),
-            state.operators,
-            w,
-            active,
-            self.uniform,
-        );
-        state.input = w.or_keep(active, state.input);
-        state.memory_sum = fed.sum.or_keep(active, state.memory_sum);
-        let out = guard.record_within(state.a * w + fed.sum, active);
+        let sum = feed_uncounted(block, rows, &mut state, w, active, self.uniform);
+        let out = guard.record_within(state.a * w + sum, active);
         state.store_evaluated(block, rows);
         guard.store(block, rows.scalar(PlantRows::PREVIOUS));
         Some(out)
@@ -368,12 +353,7 @@ impl PlantKernel<IhcMethod> {
         {
             return out;
         }
-        let mut guard = GuardLanes::load(
-            block,
-            rows.scalar(PlantRows::LIMIT_MIN),
-            rows.scalar(PlantRows::LIMIT_MAX),
-            rows.scalar(PlantRows::PREVIOUS),
-        );
+        let mut guard = self.guard(block);
         let mut state = PlayState::load(block, rows);
         let active = guard.accept(desired);
         let v_prev = guard.previous;
@@ -543,12 +523,7 @@ impl<T: Real, const W: usize> BankKernel<T, W> for PlantKernel<IhcMethod> {
     /// `Ihc::reset` for every lane of a block.
     fn reset_block(&self, block: &mut Block<'_, T, W>) {
         let rows = &self.rows;
-        let mut guard = GuardLanes::load(
-            block,
-            rows.scalar(PlantRows::LIMIT_MIN),
-            rows.scalar(PlantRows::LIMIT_MAX),
-            rows.scalar(PlantRows::PREVIOUS),
-        );
+        let mut guard = self.guard(block);
         let mut state = PlayState::load(block, rows);
         super::play::reset(block, rows, &mut state);
         guard.reset();

@@ -2,6 +2,7 @@
 //! input polynomials read back for the per-sample solve.
 
 use super::channels::Channels;
+use super::guard::GuardLanes;
 use super::lanes::Lanes;
 use super::root::{CubicLanes, PolynomialLanes};
 use super::storage::{
@@ -27,6 +28,23 @@ pub(crate) struct PlantKernel<M> {
     /// Every channel has the paper's odd cubic.
     pub cubic: bool,
     method: PhantomData<M>,
+}
+
+impl<M> PlantKernel<M> {
+    /// The output guard of a block's lanes: their limits and previous output.
+    #[inline(always)]
+    pub(crate) fn guard<T: Real, const W: usize>(
+        &self,
+        block: &Block<'_, T, W>,
+    ) -> GuardLanes<T, W> {
+        let rows = &self.rows;
+        GuardLanes::load(
+            block,
+            rows.scalar(PlantRows::LIMIT_MIN),
+            rows.scalar(PlantRows::LIMIT_MAX),
+            rows.scalar(PlantRows::PREVIOUS),
+        )
+    }
 }
 
 impl<T: Real, S: BankStorage<T, W>, M, const W: usize> Channels<T, S, PlantKernel<M>, W> {

@@ -102,6 +102,14 @@ impl<T: Real, const W: usize> PlayState<T, W> {
         block.set(rows.scalar(PlantRows::MEMORY_SUM), self.memory_sum);
     }
 
+    /// Records `x` as the last input of the lanes of `lanes`, with `sum` the memory sum it
+    /// left.
+    #[inline(always)]
+    pub fn record_input(&mut self, x: L<T, W>, sum: L<T, W>, lanes: Mask<T, W>) {
+        self.input = x.or_keep(lanes, self.input);
+        self.memory_sum = sum.or_keep(lanes, self.memory_sum);
+    }
+
     /// The bank's output at its last input, `a x + sum b_i w_i`.
     #[inline(always)]
     pub fn output(&self) -> L<T, W> {
@@ -594,11 +602,33 @@ pub(crate) fn feed<T: Real, const W: usize>(
         true,
         uniform,
     );
-    state.input = x.or_keep(active, state.input);
-    state.memory_sum = fed.sum.or_keep(active, state.memory_sum);
+    state.record_input(x, fed.sum, active);
     state.rising = fed.rising.or_keep(active, state.rising);
     state.falling = fed.falling.or_keep(active, state.falling);
     state.a * x + fed.sum
+}
+
+/// [`feed`] without the counts of moving operators (left unused, recounted before a walk):
+/// the memory and the memory sum from `x` in the lanes of `active`. Returns the memory sum.
+#[inline(always)]
+pub(crate) fn feed_uncounted<T: Real, const W: usize>(
+    block: &mut Block<'_, T, W>,
+    rows: &PlantRows,
+    state: &mut PlayState<T, W>,
+    x: L<T, W>,
+    active: Mask<T, W>,
+    uniform: bool,
+) -> L<T, W> {
+    let fed = update_memory_with::<_, _, false, true>(
+        block,
+        rows.operators(),
+        state.operators,
+        x,
+        active,
+        uniform,
+    );
+    state.record_input(x, fed.sum, active);
+    fed.sum
 }
 
 /// `crate::walk::PlayBank::feed_solved` for the lanes of `active`: the memory from the solved

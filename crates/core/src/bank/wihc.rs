@@ -1,13 +1,12 @@
 //! A bank of WIHC channels (section 3.2, eq. (9)): [`crate::Wihc`] lane by lane.
 
 use super::channels::{Channels, compensator_bank};
-use super::guard::GuardLanes;
 use super::ihc::rounding_tolerance;
 use super::lanes::{Lanes, Mask};
 use super::plant::{PlantKernel, guarded_target, plant_bank, with_remainder, write_lane};
 use super::play::{
-    LaneEquation, LaneSolution, PlayState, ReachOnly, feed, feed_solved_or_full, recount, solve,
-    update_memory_with,
+    LaneEquation, LaneSolution, PlayState, ReachOnly, feed, feed_solved_or_full, feed_uncounted,
+    recount, solve,
 };
 use super::root::{LaneRemainder, increasing_root};
 use super::run::{BankKernel, BlockKernel, run};
@@ -170,12 +169,7 @@ impl PlantKernel<WihcMethod> {
         remainder: R,
     ) -> L<T, W> {
         let rows = &self.rows;
-        let mut guard = GuardLanes::load(
-            block,
-            rows.scalar(PlantRows::LIMIT_MIN),
-            rows.scalar(PlantRows::LIMIT_MAX),
-            rows.scalar(PlantRows::PREVIOUS),
-        );
+        let mut guard = self.guard(block);
         let mut state = PlayState::load(block, rows);
         let active = guard.accept(desired);
         let v_prev = state.input;
@@ -250,16 +244,7 @@ impl PlantKernel<WihcMethod> {
             let v = guard.record(out, clamped, reachable, active);
             // The memory and its weighted sum only: the counts of operators at the edges,
             // which only the walk above reads, are recomputed before it runs.
-            let fed = update_memory_with::<_, _, false, true>(
-                block,
-                rows.operators(),
-                state.operators,
-                v,
-                active,
-                self.uniform,
-            );
-            state.input = v.or_keep(active, state.input);
-            state.memory_sum = fed.sum.or_keep(active, state.memory_sum);
+            feed_uncounted(block, rows, &mut state, v, active, self.uniform);
             v
         };
         state.store(block, rows);
@@ -283,12 +268,7 @@ impl<T: Real, const W: usize> BankKernel<T, W> for PlantKernel<WihcMethod> {
     /// `Wihc::reset` for every lane of a block.
     fn reset_block(&self, block: &mut Block<'_, T, W>) {
         let rows = &self.rows;
-        let mut guard = GuardLanes::load(
-            block,
-            rows.scalar(PlantRows::LIMIT_MIN),
-            rows.scalar(PlantRows::LIMIT_MAX),
-            rows.scalar(PlantRows::PREVIOUS),
-        );
+        let mut guard = self.guard(block);
         let mut state = PlayState::load(block, rows);
         super::play::reset(block, rows, &mut state);
         guard.reset();

@@ -64,9 +64,20 @@ pub(crate) fn proven_within<T: Real, const W: usize>(
     min: L<T, W>,
     max: L<T, W>,
 ) -> Mask<T, W> {
+    within_by(last, w, min, max, margin(last, w, min, max))
+}
+
+/// [`proven_within`] with its rounding allowance `margin` computed.
+#[inline(always)]
+fn within_by<T: Real, const W: usize>(
+    last: &LastInput<T, W>,
+    w: L<T, W>,
+    min: L<T, W>,
+    max: L<T, W>,
+    margin: L<T, W>,
+) -> Mask<T, W> {
     let zero = Lanes::zero();
     let v_prev = last.output;
-    let margin = margin(last, w, min, max);
     let up = (w - last.input).max(zero);
     let down = (last.input - w).max(zero);
     let q = last.least_inverse_alpha;
@@ -95,9 +106,9 @@ fn tolerance<T: Real, const W: usize>() -> L<T, W> {
 /// The lanes whose guarded delayed loop (`crate::SolveMode::DelayedGuarded`) is proven, before
 /// `v = P1^{-1}[w]` is evaluated, to pass its reach test (`crate::ihc::guarded_reach`: `y_d`
 /// reachable within the limits, so `v` is the sample's output without a walk) by the test's
-/// bound at the limit, in lanes [`proven_within`] proves: `h_min` and `h_max` are the
-/// remainder at the limits, `f_exact = w(t - Ts) + h(v(t - Ts)) - y_d` the exact residual at
-/// the last sample.
+/// bound at the limit, among the lanes [`proven_within`] proves (its test is part of this
+/// one, with the same allowance): `h_min` and `h_max` are the remainder at the limits,
+/// `f_exact = w(t - Ts) + h(v(t - Ts)) - y_d` the exact residual at the last sample.
 ///
 /// Rising (`f_exact <= 0`), the reach test passes when `w >= w(t - Ts)` and `w + q (max - v) +
 /// h(max) - y_d >= 0` (`q` the least reciprocal slope). Where [`proven_within`] holds, `v <=
@@ -134,7 +145,7 @@ pub(crate) fn proven_reachable<T: Real, const W: usize>(
     let slack = tolerance::<T, W>() * size;
     let rises = w.ge(w_prev) & up.ge(slack);
     let falls = w.le(w_prev) & down.le(-slack);
-    Mask::choose(f_exact.le(zero), rises, falls)
+    within_by(last, w, min, max, margin) & Mask::choose(f_exact.le(zero), rises, falls)
 }
 
 #[cfg(test)]
@@ -169,6 +180,32 @@ mod tests {
         PlayBank::new(T::from_f64(a), &thresholds[..n], &weights[..n]).expect("positive slopes")
     }
 
+    /// A random bank after a random history of up to 40 inputs within twice its largest
+    /// threshold (at least 1) either way, and that scale.
+    fn random_history<T: Real>(rng: &mut ChaCha8Rng) -> (PlayBank<T, Bounded<T, 16>>, f64) {
+        let mut bank = random_bank::<T>(rng);
+        let scale = bank
+            .thresholds()
+            .last()
+            .map_or(1.0, |&r| Real::to_f64(r))
+            .max(1.0);
+        for _ in 0..(rng.random::<u32>() % 40) {
+            bank.feed(T::from_f64(scale * (4.0 * rng.random::<f64>() - 2.0)));
+        }
+        (bank, scale)
+    }
+
+    /// What the bounds read of `bank`, in one lane.
+    fn last_input<T: Real>(bank: &PlayBank<T, Bounded<T, 16>>) -> LastInput<T, 1> {
+        LastInput {
+            output: Lanes::splat(bank.output()),
+            input: Lanes::splat(bank.input()),
+            least_inverse_alpha: Lanes::splat(bank.least_inverse_alpha()),
+            slope_sum: Lanes::splat(bank.slope_sum()),
+            reach_sum: Lanes::splat(bank.reach_sum()),
+        }
+    }
+
     /// Random banks after random histories of inputs, and limits placed around the bound's
     /// edge (within a few per cent of the move it allows): wherever the bound proves a target
     /// `w` within the limits, the direct evaluation `P1^{-1}[w]` (the bits the bank computes)
@@ -177,24 +214,10 @@ mod tests {
         let mut rng = ChaCha8Rng::seed_from_u64(seed);
         let (mut proven, mut inside, mut roomy, mut roomy_proven) = (0, 0, 0, 0);
         for _ in 0..400 {
-            let mut bank = random_bank::<T>(&mut rng);
-            let scale = bank
-                .thresholds()
-                .last()
-                .map_or(1.0, |&r| Real::to_f64(r))
-                .max(1.0);
-            for _ in 0..(rng.random::<u32>() % 40) {
-                bank.feed(T::from_f64(scale * (4.0 * rng.random::<f64>() - 2.0)));
-            }
+            let (bank, scale) = random_history::<T>(&mut rng);
             let q = bank.least_inverse_alpha();
+            let last = last_input(&bank);
             for _ in 0..50 {
-                let last = LastInput::<T, 1> {
-                    output: Lanes::splat(bank.output()),
-                    input: Lanes::splat(bank.input()),
-                    least_inverse_alpha: Lanes::splat(q),
-                    slope_sum: Lanes::splat(bank.slope_sum()),
-                    reach_sum: Lanes::splat(bank.reach_sum()),
-                };
                 let step =
                     scale * 10f64.powf(-6.0 * rng.random::<f64>()) * (rng.random::<f64>() - 0.5);
                 let w = T::from_f64(Real::to_f64(bank.input()) + step);
@@ -256,15 +279,7 @@ mod tests {
         let mut rng = ChaCha8Rng::seed_from_u64(seed);
         let (mut proven, mut passes, mut tight_proven, mut clear_proven) = (0, 0, 0, 0);
         for _ in 0..400 {
-            let mut bank = random_bank::<T>(&mut rng);
-            let scale = bank
-                .thresholds()
-                .last()
-                .map_or(1.0, |&r| Real::to_f64(r))
-                .max(1.0);
-            for _ in 0..(rng.random::<u32>() % 40) {
-                bank.feed(T::from_f64(scale * (4.0 * rng.random::<f64>() - 2.0)));
-            }
+            let (mut bank, scale) = random_history::<T>(&mut rng);
             // Half the histories end far out the way the loop goes on: every operator then
             // moves with the input, and where the bank's steepest slope is its last, the
             // bound on `v` is met with equality (the allowances are what is left).
@@ -275,13 +290,7 @@ mod tests {
             }
             let q = bank.least_inverse_alpha();
             let (w_prev, v_prev) = (bank.input(), bank.output());
-            let last = LastInput::<T, 1> {
-                output: Lanes::splat(v_prev),
-                input: Lanes::splat(w_prev),
-                least_inverse_alpha: Lanes::splat(q),
-                slope_sum: Lanes::splat(bank.slope_sum()),
-                reach_sum: Lanes::splat(bank.reach_sum()),
-            };
+            let last = last_input(&bank);
             let v_scale = Real::to_f64(v_prev).abs().max(scale);
             for _ in 0..50 {
                 // h(v) = c v^3, of either sign, up to a tenth of the bank's scale at v_scale.
